@@ -1,0 +1,22 @@
+// Model registry: the one place that knows every engine.
+#pragma once
+
+#include "common/simulation.hpp"
+
+#include <memory>
+#include <string>
+
+namespace gapflow {
+
+enum class ModelKind { box2d, bullet };
+// "2d" | "3d"; throws std::invalid_argument otherwise.
+ModelKind parse_model_kind(const std::string& name);
+const char* to_string(ModelKind kind);  // "2d" | "3d"
+
+std::unique_ptr<EngineSession> make_session(const CompiledScenario& scenario, ModelKind kind);
+
+// Build the session for `kind` and run it.
+RunRecord run_model(const CompiledScenario& scenario, ModelKind kind,
+                    const StepObserver* observer = nullptr);
+
+}  // namespace gapflow

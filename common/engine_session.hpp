@@ -1,0 +1,43 @@
+// The contract between the shared run driver and an engine (2D or 3D).
+//
+// A session is the per-run engine state (like MuJoCo's mjData), built by a
+// model from a CompiledScenario (like mjModel). The driver (simulation.hpp)
+// owns the time loop, the shaking schedule, measurement and stop rules, so the
+// models only step physics.
+#pragma once
+
+#include "common/geometry.hpp"
+#include "common/shaking.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+struct ActiveParticle {
+  int id;        // particle index
+  Vec2 position; // m, plane frame (lab units)
+};
+
+class EngineSession {
+ public:
+  virtual ~EngineSession() = default;
+  virtual std::string model_name() const = 0;  // "2d" or "3d"
+  virtual double time_step() const = 0;        // s (lab) advanced by one step()
+  // Close or open the release barrier.
+  virtual void set_barrier(bool closed) = 0;
+  // Kinematic bodies must reach these offsets (m, from rest) at the end of the next step.
+  virtual void set_shake_targets(const ShakeOffsets& offsets_at_end_of_step) = 0;
+  // Advance by time_step().
+  virtual void step() = 0;
+  // Set every particle's velocity (linear and angular) to zero.
+  virtual void zero_velocities() = 0;
+  // Positions of the particles still simulated.
+  virtual void active_particles(std::vector<ActiveParticle>& out) const = 0;
+  // Remove particles from the simulation (passed far below the gap, or escaped).
+  virtual void retire(const std::vector<int>& ids) = 0;
+};
+
+
+}  // namespace gapflow

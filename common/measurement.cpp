@@ -1,0 +1,148 @@
+#include "common/measurement.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gapflow {
+
+GapMonitor::GapMonitor(const CompiledScenario& scenario) : sc_(scenario) {
+  state_.resize(scenario.particles.size());
+  for (size_t i = 0; i < state_.size(); ++i) state_[i].last = scenario.particles[i].position;
+  inside_ = static_cast<int>(state_.size());
+  // Three diameters below the gap a passed particle can no longer touch anything
+  // that matters for the flow: remove it, so that the engines stop paying for it.
+  retire_depth_ = 3 * scenario.nominal_diameter;
+  const double shake = std::max(scenario.def.shaking.walls.enabled ? scenario.def.shaking.walls.amplitude_mm : 0.0,
+                                0.0) * 1e-3;
+  gap_tolerance_ = shake + 1e-6;
+}
+
+namespace {
+
+bool outside_domain(const CompiledScenario& c, Vec2 p) {
+  if (!std::isfinite(p.x) || !std::isfinite(p.y)) return true;
+  if (std::abs(p.x) > c.channel_width / 2) return true;  // through a retaining wall
+  if (p.y > c.plane_length) return true;                 // through the top wall
+  // Behind a bottleneck wall (deeper than the wall is thick): tunnelled through it.
+  if (p.y >= 0 && p.y <= c.funnel_height + c.wall_thickness &&
+      clearance_to_bottleneck_walls(c, p) < -c.wall_thickness)
+    return true;
+  return false;
+}
+
+}  // namespace
+
+ParticleFate GapMonitor::observe(int id, Vec2 p, double t) {
+  State& s = state_[static_cast<size_t>(id)];
+  if (s.escaped) return ParticleFate::escaped;
+  if (s.passed) return p.y < -retire_depth_ ? ParticleFate::passed_retire : ParticleFate::passed_keep;
+
+  if (p.y < 0 && s.last.y >= 0 && std::isfinite(p.x)) {
+    // Interpolate the crossing within the step: the gap line is crossed once.
+    const double f = s.last.y / (s.last.y - p.y);
+    const double tc = t_prev_ + f * (t - t_prev_);
+    const double xc = s.last.x + f * (p.x - s.last.x);
+    if (std::abs(xc) <= sc_.gap / 2 + gap_tolerance_) {
+      s.passed = true;
+      ++passed_;
+      crossings_.push_back({id, tc, xc});
+      last_crossing_t_ = std::max(last_crossing_t_, tc);
+      s.last = p;
+      return p.y < -retire_depth_ ? ParticleFate::passed_retire : ParticleFate::passed_keep;
+    }
+    s.escaped = true;  // crossed the gap line beside the gap: through a bottleneck wall
+  } else if (outside_domain(sc_, p)) {
+    s.escaped = true;
+  }
+  if (s.escaped) {
+    ++escaped_;
+    return ParticleFate::escaped;
+  }
+  s.last = p;
+  ++inside_this_step_;
+  return ParticleFate::inside;
+}
+
+void GapMonitor::end_step(double t) {
+  inside_ = inside_this_step_;
+  const int error = std::abs(inside_ + passed_ + escaped_ - particles());
+  max_conservation_error_ = std::max(max_conservation_error_, error);
+  inside_this_step_ = 0;
+  t_prev_ = t;
+}
+
+void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s, double t_end,
+                  std::vector<Avalanche>& avalanches, std::vector<Clog>& clogs) {
+  avalanches.clear();
+  clogs.clear();
+  double previous = 0.0;  // release
+  bool open = false;
+  for (const Crossing& c : crossings) {
+    const double wait = c.t - previous;
+    if (wait >= clog_timeout_s) {
+      clogs.push_back({previous, wait, false});
+      open = false;  // the current avalanche (if any) ended in this clog
+    }
+    if (!open) {
+      avalanches.push_back({0, c.t, c.t, avalanches.empty(), false});
+      open = true;
+    }
+    Avalanche& a = avalanches.back();
+    ++a.size;
+    a.t_end = c.t;
+    previous = c.t;
+  }
+  const double tail = t_end - previous;
+  if (tail >= clog_timeout_s) {
+    clogs.push_back({previous, tail, true});  // the run ended before this clog broke
+  } else if (open) {
+    avalanches.back().censored = true;  // the run ended while flowing (or nothing was left)
+  }
+}
+
+void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
+  r.particles = particles();
+  r.passed = passed_;
+  r.escaped = escaped_;
+  r.max_conservation_error = max_conservation_error_;
+  r.sim_time_s = t_end;
+  r.end_reason = reason;
+  r.crossings = crossings_;
+  std::stable_sort(r.crossings.begin(), r.crossings.end(),
+                   [](const Crossing& a, const Crossing& b) { return a.t < b.t; });
+  segment_flow(r.crossings, sc_.def.run.clog_timeout_s, t_end, r.avalanches, r.clogs);
+
+  const auto n = static_cast<int>(r.crossings.size());
+  r.j_paper.reset();
+  r.j_flowing.reset();
+  r.j_mid.reset();
+  if (n > 0 && passed_ == particles()) r.j_paper = n / r.crossings.back().t;
+  if (n >= 2) {
+    double clogged = 0;  // complete clogs between the first and the last crossing
+    for (const Clog& c : r.clogs)
+      if (!c.censored && c.t_start >= r.crossings.front().t) clogged += c.duration;
+    const double flowing = r.crossings.back().t - r.crossings.front().t - clogged;
+    if (flowing > 0) r.j_flowing = (n - 1) / flowing;
+  }
+  if (n >= 10) {
+    const int i10 = static_cast<int>(std::floor(0.1 * (n - 1)));
+    const int i90 = static_cast<int>(std::ceil(0.9 * (n - 1)));
+    const double dt = r.crossings[i90].t - r.crossings[i10].t;
+    if (dt > 0) r.j_mid = (i90 - i10) / dt;
+  }
+  if (reason == EndReason::permanent_clog)
+    r.regime = Regime::clogged;
+  else
+    r.regime = r.clogs.empty() ? Regime::continuous : Regime::intermittent;
+}
+
+StopDecision should_stop(const RunDef& run, const GapMonitor& m, double t) {
+  if (m.passed() + m.escaped() >= m.particles()) return {true, EndReason::all_passed};
+  if (run.end == EndCondition::n_passed && m.passed() >= run.n_passed) return {true, EndReason::n_passed};
+  if (t >= run.time_limit_s - 1e-12) return {true, EndReason::time_limit};
+  if (run.stop_after_no_flow_s > 0 && t - m.last_crossing_time() >= run.stop_after_no_flow_s)
+    return {true, EndReason::permanent_clog};
+  return {};
+}
+
+}  // namespace gapflow

@@ -1,0 +1,72 @@
+// Engine-independent measurement: the gap-line crossing of each particle (once),
+// escapes through walls, and the run record built from the crossings.
+// Both models feed it particle positions after every step; neither keeps a
+// second copy of this logic.
+#pragma once
+
+#include "common/geometry.hpp"
+#include "common/run_record.hpp"
+
+#include <vector>
+
+namespace gapflow {
+
+enum class ParticleFate { inside, passed_retire, passed_keep, escaped };
+
+class GapMonitor {
+ public:
+  explicit GapMonitor(const CompiledScenario& scenario);
+
+  // Report the position (plane frame, lab metres) of an active particle after a
+  // step that ended at time t (s after release). Returns what the model should
+  // do with it: keep simulating, or retire it (remove the body) because it has
+  // passed and is well below the gap, or because it escaped.
+  ParticleFate observe(int id, Vec2 position, double t);
+
+  // Called once per step after all observe() calls.
+  void end_step(double t);
+
+  int passed() const { return passed_; }
+  int escaped() const { return escaped_; }
+  int inside() const { return inside_; }  // as of the last end_step()
+  int particles() const { return static_cast<int>(state_.size()); }
+  double last_crossing_time() const { return last_crossing_t_; }
+  const std::vector<Crossing>& crossings() const { return crossings_; }
+
+  // Fill the measurement part of a record (counts, crossings, avalanches, clogs, J, regime).
+  void finish(double t_end, EndReason reason, RunRecord& record) const;
+
+ private:
+  struct State {
+    bool seen = false;
+    bool passed = false;
+    bool escaped = false;
+    Vec2 last;  // m, position at the previous observation
+  };
+  const CompiledScenario& sc_;
+  std::vector<State> state_;
+  std::vector<Crossing> crossings_;
+  int passed_ = 0;
+  int escaped_ = 0;
+  int inside_ = 0;             // observed this step, neither passed nor escaped
+  int inside_this_step_ = 0;
+  int max_conservation_error_ = 0;
+  double t_prev_ = 0;          // s, end of the previous step
+  double last_crossing_t_ = 0;
+  double retire_depth_ = 0;    // m below the gap line where passed particles are removed
+  double gap_tolerance_ = 0;   // m, how far outside |x| = W/2 a crossing may lie (shaking moves the tips)
+};
+
+// Stop rule shared by both models.
+struct StopDecision {
+  bool stop = false;
+  EndReason reason = EndReason::time_limit;
+};
+StopDecision should_stop(const RunDef& run, const GapMonitor& monitor, double t);
+
+// Avalanches and clogs from sorted crossing times (exposed for tests/statistics).
+// A gap of at least clog_timeout_s without a crossing (counted from release) is a clog.
+void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s, double t_end,
+                  std::vector<Avalanche>& avalanches, std::vector<Clog>& clogs);
+
+}  // namespace gapflow

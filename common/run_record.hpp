@@ -1,0 +1,88 @@
+// RunRecord: everything one simulation run reports, whatever the model.
+// Built by GapMonitor::finish() (measurement.hpp); written as JSON by write_json.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+struct Crossing {
+  int id = 0;       // particle index
+  double t = 0;     // s after release, interpolated within the step
+  double x = 0;     // m, where it crossed the gap line (plane frame)
+};
+
+// Crossings separated by less than the clog timeout.
+struct Avalanche {
+  int size = 0;           // particles
+  double t_start = 0;     // s, first crossing
+  double t_end = 0;       // s, last crossing
+  bool first = false;     // started from the initial packing (usually discarded)
+  bool censored = false;  // not ended by a clog (run ended while flowing, or no particles left)
+};
+
+// A gap of at least clog_timeout_s without a crossing.
+struct Clog {
+  double t_start = 0;     // s, last crossing before the clog (or release)
+  double duration = 0;    // s, until the next crossing (or run end)
+  bool censored = false;  // the run ended before the clog broke
+};
+
+enum class Regime { continuous, intermittent, clogged };
+enum class EndReason { all_passed, n_passed, time_limit, permanent_clog };
+
+const char* to_string(Regime r);
+const char* to_string(EndReason r);
+
+struct RunRecord {
+  // Identity.
+  std::string model;                 // "2d" or "3d"
+  std::string scenario_name;
+  std::uint64_t scenario_hash = 0;
+  std::uint64_t base_seed = 0;
+  int replicate = 0;
+  std::uint64_t run_seed = 0;
+  double time_step_s = 0;            // s (lab)
+
+  // Geometry (for the dimensionless form).
+  double diameter_m = 0;             // nominal d
+  double gap_m = 0;                  // W
+  double distance_m = 0;             // D (0 without obstruction)
+  double incline_rad = 0;
+
+  // Counts.
+  int particles = 0;                 // N
+  int passed = 0;                    // crossed the gap line
+  int escaped = 0;                   // left the domain anywhere but the gap (tunnelling); must be 0
+  int max_conservation_error = 0;    // max over steps of |passed + inside + escaped - N|; must be 0
+
+  // Time.
+  double sim_time_s = 0;             // s simulated after release
+  double wall_time_s = 0;            // s of wall clock for the whole run (including settling)
+  EndReason end_reason = EndReason::time_limit;
+  Regime regime = Regime::continuous;
+
+  // Flow rates, particles/s. Missing when undefined.
+  std::optional<double> j_paper;     // N / time for all to pass (only when all passed)
+  std::optional<double> j_flowing;   // crossings per second of flowing time (clogs removed)
+  std::optional<double> j_mid;       // rate between the 10 % and 90 % crossings
+
+  std::vector<Crossing> crossings;
+  std::vector<Avalanche> avalanches;
+  std::vector<Clog> clogs;
+
+  // Dimensionless J*sqrt(d/g), g = 9.81 m/s^2.
+  std::optional<double> j_paper_star() const;
+  std::optional<double> j_flowing_star() const;
+  double sim_per_wall() const { return wall_time_s > 0 ? sim_time_s / wall_time_s : 0; }
+};
+
+void write_json(std::ostream& out, const RunRecord& r);
+// One-screen summary for people.
+void write_summary(std::ostream& out, const RunRecord& r);
+
+}  // namespace gapflow

@@ -1,0 +1,828 @@
+// Strict scenario loader: TOML text -> validated ScenarioDef (+ where each key was set).
+//
+// The file is parsed with toml++, command-line overrides are written into the
+// parsed table, and only then is the table read section by section. Overrides
+// therefore meet exactly the checks that the file meets. Every read registers
+// its key as allowed, so a section's allowed-key list can never drift from what
+// the reader actually understands.
+#include "common/scenario_loader.hpp"
+
+#include "common/random.hpp"
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <utility>
+
+namespace gapflow {
+
+namespace {
+
+std::string format_message(const SourceLocation& at, const std::string& key, const std::string& value,
+                           const std::string& allowed) {
+  std::string where = at.line > 0 ? fmt::format("{}:{}:{}", at.source, at.line, at.column) : at.source;
+  if (key.empty()) return fmt::format("{}: {}", where, allowed);
+  if (value.empty()) return fmt::format("{}: key '{}' is missing: {}", where, key, allowed);
+  return fmt::format("{}: key '{}' = {}: {}", where, key, value, allowed);
+}
+
+}  // namespace
+
+ScenarioError::ScenarioError(SourceLocation where, std::string key, std::string value, std::string allowed)
+    : std::runtime_error(format_message(where, key, value, allowed)),
+      where_(std::move(where)),
+      key_(std::move(key)),
+      value_(std::move(value)),
+      allowed_(std::move(allowed)) {}
+
+ScenarioInvalid::ScenarioInvalid(std::string key_, std::string value_, std::string allowed_)
+    : std::runtime_error(fmt::format("key '{}' = {}: {}", key_, value_, allowed_)),
+      key(std::move(key_)),
+      value(std::move(value_)),
+      allowed(std::move(allowed_)) {}
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// ---------------------------------------------------------------- value text
+
+// Shortest text that reads back to the same double, spelled as a TOML float
+// (a bare "1000" would read back as an integer).
+std::string toml_double(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[64];
+  auto end = std::to_chars(buf, buf + sizeof buf, v).ptr;
+  std::string s(buf, end);
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string toml_quote(std::string_view s) {
+  std::string out = "\"";
+  for (unsigned char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (c < 0x20 || c == 0x7F)
+          out += fmt::format("\\u{:04X}", static_cast<unsigned>(c));
+        else
+          out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
+}
+
+// The value as TOML would spell it, for error messages.
+std::string value_text(const toml::node& n) {
+  if (auto s = n.as_string()) return toml_quote(s->get());
+  if (auto i = n.as_integer()) return std::to_string(i->get());
+  if (auto f = n.as_floating_point()) return toml_double(f->get());
+  if (auto b = n.as_boolean()) return b->get() ? "true" : "false";
+  if (auto a = n.as_array()) {
+    std::string out = "[";
+    for (std::size_t k = 0; k < a->size(); ++k) out += (k ? ", " : "") + value_text(*a->get(k));
+    return out + "]";
+  }
+  if (n.is_table()) return "{...}";
+  std::ostringstream os;  // dates and times
+  n.visit([&](auto&& v) { os << v; });
+  return os.str();
+}
+
+// ---------------------------------------------------------------- ranges
+
+struct Range {
+  double lo = -kInf, hi = kInf;
+  bool lo_open = false, hi_open = false;
+  const char* unit = "";
+  bool contains(double v) const {
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+  }
+  // "> 0 (mm)", "in [0, 60) (deg)", "" for any finite value.
+  std::string text() const {
+    std::string b;
+    if (lo > -kInf && hi < kInf)
+      b = fmt::format("in {}{}, {}{}", lo_open ? '(' : '[', lo, hi, hi_open ? ')' : ']');
+    else if (lo > -kInf)
+      b = fmt::format("{} {}", lo_open ? ">" : ">=", lo);
+    else if (hi < kInf)
+      b = fmt::format("{} {}", hi_open ? "<" : "<=", hi);
+    if (*unit) b += fmt::format("{}({})", b.empty() ? "" : " ", unit);
+    return b;
+  }
+};
+
+Range above(double lo, const char* unit = "") { return {lo, kInf, true, false, unit}; }
+Range at_least(double lo, const char* unit = "") { return {lo, kInf, false, false, unit}; }
+Range closed(double lo, double hi, const char* unit = "") { return {lo, hi, false, false, unit}; }
+Range upper_open(double lo, double hi, const char* unit = "") { return {lo, hi, false, true, unit}; }
+Range lower_open(double lo, double hi, const char* unit = "") { return {lo, hi, true, false, unit}; }
+Range any(const char* unit = "") { return {-kInf, kInf, false, false, unit}; }
+
+std::string int_range_text(std::int64_t lo, std::int64_t hi) {
+  if (hi == std::numeric_limits<std::int64_t>::max()) return fmt::format("an integer >= {}", lo);
+  return fmt::format("an integer in [{}, {}]", lo, hi);
+}
+
+// ---------------------------------------------------------------- reader
+
+struct Reader {
+  std::string source;
+  std::map<std::string, SourceLocation> overridden;  // keys (and tables) written by --set
+  SourceMap where;
+
+  SourceLocation locate(const std::string& key, const toml::node& n) const {
+    if (auto it = overridden.find(key); it != overridden.end()) return it->second;
+    const auto& begin = n.source().begin;
+    if (begin.line == 0) return {source, 1, 1};
+    return {source, static_cast<int>(begin.line), static_cast<int>(begin.column)};
+  }
+};
+
+std::string join_dotted(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+// One table of the scenario. Every accessor registers its key as allowed.
+class Section {
+ public:
+  Section(Reader& r, const toml::table* t, std::string path) : r_(r), t_(t), path_(std::move(path)) {}
+
+  const std::string& path() const { return path_; }
+  bool present() const { return t_ != nullptr; }
+  std::string dotted(std::string_view key) const { return join_dotted(path_, key); }
+
+  // The node of `key`, or nullptr. Records where it was set.
+  const toml::node* get(std::string_view key) {
+    allowed_.emplace_back(key);
+    const toml::node* n = t_ ? t_->get(key) : nullptr;
+    if (n) r_.where[dotted(key)] = r_.locate(dotted(key), *n);
+    return n;
+  }
+  // A key that is allowed but not used (shape-specific keys of another shape).
+  void ignore(std::string_view key) { get(key); }
+
+  bool set(std::string_view key) const { return r_.where.count(dotted(key)) > 0; }
+  // Where this section starts; the top of the file for the root or an absent section.
+  SourceLocation section_location() const {
+    if (auto it = r_.where.find(path_); !path_.empty() && it != r_.where.end()) return it->second;
+    return {r_.source, 1, 1};
+  }
+  // Where `key` was set; else where its section starts.
+  SourceLocation location(std::string_view key) const {
+    if (auto it = r_.where.find(dotted(key)); it != r_.where.end()) return it->second;
+    return section_location();
+  }
+
+  [[noreturn]] void fail(std::string_view key, const toml::node& n, const std::string& allowed) const {
+    throw ScenarioError(r_.locate(dotted(key), n), dotted(key), value_text(n), allowed);
+  }
+  // A check between keys: blame `key`, shown with `value` (its current value).
+  [[noreturn]] void fail_value(std::string_view key, const std::string& value, const std::string& allowed,
+                               std::string_view fallback_key = {}) const {
+    bool given = set(key);
+    SourceLocation at = given || fallback_key.empty() ? location(key) : location(fallback_key);
+    throw ScenarioError(at, dotted(key), given ? value : value + " (default)", allowed);
+  }
+  [[noreturn]] void missing(std::string_view key, const std::string& allowed,
+                            std::optional<SourceLocation> at = std::nullopt) const {
+    throw ScenarioError(at ? *at : section_location(), dotted(key), "", allowed);
+  }
+
+  Section section(std::string_view key) {
+    const toml::node* n = get(key);
+    if (n && !n->is_table()) fail(key, *n, fmt::format("must be a table (section [{}])", dotted(key)));
+    return Section(r_, n ? n->as_table() : nullptr, dotted(key));
+  }
+
+  std::optional<double> number(std::string_view key, const Range& range) {
+    const toml::node* n = get(key);
+    if (!n) return std::nullopt;
+    std::string bounds = range.text();
+    std::string sep = bounds.empty() ? "" : " ";
+    if (!n->is_number()) fail(key, *n, "must be a number" + sep + bounds);
+    double v = n->value<double>().value();
+    if (!std::isfinite(v)) fail(key, *n, "must be a finite number" + sep + bounds);
+    if (!range.contains(v)) fail(key, *n, "must be " + bounds);
+    return v;
+  }
+  void number(std::string_view key, double& out, const Range& range) {
+    if (auto v = number(key, range)) out = *v;
+  }
+
+  std::optional<std::int64_t> integer_value(std::string_view key, std::int64_t lo,
+                                      std::int64_t hi = std::numeric_limits<std::int64_t>::max()) {
+    const toml::node* n = get(key);
+    if (!n) return std::nullopt;
+    std::string allowed = "must be " + int_range_text(lo, hi);
+    if (!n->is_integer()) fail(key, *n, allowed);
+    std::int64_t v = n->as_integer()->get();
+    if (v < lo || v > hi) fail(key, *n, allowed);
+    return v;
+  }
+  void integer(std::string_view key, int& out, std::int64_t lo,
+               std::int64_t hi = std::numeric_limits<int>::max()) {
+    if (auto v = integer_value(key, lo, hi)) out = static_cast<int>(*v);
+  }
+
+  void boolean(std::string_view key, bool& out) {
+    const toml::node* n = get(key);
+    if (!n) return;
+    if (!n->is_boolean()) fail(key, *n, "must be true or false");
+    out = n->as_boolean()->get();
+  }
+
+  std::optional<std::string> text(std::string_view key) {
+    const toml::node* n = get(key);
+    if (!n) return std::nullopt;
+    if (!n->is_string()) fail(key, *n, "must be a string");
+    return n->as_string()->get();
+  }
+
+  template <class E>
+  std::optional<E> choice(std::string_view key, std::initializer_list<std::pair<std::string_view, E>> options) {
+    const toml::node* n = get(key);
+    if (!n) return std::nullopt;
+    std::string names;
+    for (const auto& [name, value] : options) names += (names.empty() ? "" : ", ") + std::string(name);
+    if (!n->is_string()) fail(key, *n, "must be a string, one of: " + names);
+    for (const auto& [name, value] : options)
+      if (n->as_string()->get() == name) return value;
+    fail(key, *n, "one of: " + names);
+  }
+
+  // Unknown keys are errors that list what this section allows.
+  void finish() const {
+    if (!t_) return;
+    for (const auto& [k, n] : *t_) {
+      if (std::find(allowed_.begin(), allowed_.end(), k.str()) != allowed_.end()) continue;
+      std::string list;
+      for (const auto& a : allowed_) list += (list.empty() ? "" : ", ") + a;
+      std::string where = path_.empty() ? "at the top level" : "in [" + path_ + "]";
+      throw ScenarioError(r_.locate(dotted(k.str()), n), dotted(k.str()), value_text(n),
+                          fmt::format("unknown key; allowed {}: {}", where, list));
+    }
+  }
+
+ private:
+  Reader& r_;
+  const toml::table* t_;
+  std::string path_;
+  std::vector<std::string> allowed_;
+};
+
+// ---------------------------------------------------------------- sections
+
+void read_scenario_section(Section s, ScenarioDef& d) {
+  const char* need = "required: a non-empty string";
+  auto name = s.text("name");
+  if (!name) s.missing("name", need);
+  if (name->empty()) s.fail_value("name", "\"\"", need);
+  d.name = *name;
+  if (auto desc = s.text("description")) d.description = *desc;
+  s.finish();
+}
+
+void read_plane(Section s, PlaneDef& p) {
+  s.number("incline_deg", p.incline_deg, upper_open(0, 60, "deg"));
+  s.number("length_mm", p.length_mm, above(0, "mm"));
+  s.number("width_mm", p.width_mm, above(0, "mm"));
+  s.finish();
+}
+
+void read_bottleneck(Section s, BottleneckDef& b) {
+  s.number("wall_angle_deg", b.wall_angle_deg, lower_open(0, 90, "deg"));
+  s.number("gap_mm", b.gap_mm, above(0, "mm"));
+  s.number("wall_thickness_mm", b.wall_thickness_mm, above(0, "mm"));
+  s.finish();
+}
+
+// A number of mm, or one of the glass-bead presets of the paper.
+void read_diameter(Section& s, double& out) {
+  const toml::node* n = s.get("diameter_mm");
+  if (!n) return;
+  const std::string allowed = "must be a number > 0 (mm) or one of: small, medium, large";
+  if (auto str = n->as_string()) {
+    const std::string& v = str->get();
+    if (v == "small") out = 6.15;
+    else if (v == "medium") out = 7.75;
+    else if (v == "large") out = 11.9;
+    else s.fail("diameter_mm", *n, allowed);
+    return;
+  }
+  if (!n->is_number()) s.fail("diameter_mm", *n, allowed);
+  double v = n->value<double>().value();
+  if (!std::isfinite(v) || v <= 0) s.fail("diameter_mm", *n, allowed);
+  out = v;
+}
+
+void read_particles(Section s, ParticlesDef& p) {
+  s.integer("count", p.count, 1, 1000000);
+  read_diameter(s, p.diameter_mm);
+  s.number("size_scatter", p.size_scatter, closed(0, 0.2));
+  if (auto v = s.choice<SizeDistribution>("size_distribution", {{"none", SizeDistribution::none},
+                                                                {"uniform", SizeDistribution::uniform},
+                                                                {"normal", SizeDistribution::normal}}))
+    p.size_distribution = *v;
+  s.number("density_kg_m3", p.density_kg_m3, above(0, "kg/m^3"));
+  s.number("friction_particle", p.friction_particle, closed(0, 2));
+  s.number("friction_wall", p.friction_wall, closed(0, 2));
+  s.number("friction_base", p.friction_base, closed(0, 2));
+  s.number("restitution", p.restitution, closed(0, 1));
+  s.number("rolling_resistance", p.rolling_resistance, upper_open(0, 1));
+  s.number("spinning_friction_mm", p.spinning_friction_mm, at_least(0, "mm"));
+  s.finish();
+}
+
+void read_release(Section s, ReleaseDef& r) {
+  s.number("barrier_mm", r.barrier_mm, at_least(0, "mm"));
+  s.number("settle_s", r.settle_s, closed(0, 60, "s"));
+  s.number("lattice_gap", r.lattice_gap, closed(0, 1));
+  s.finish();
+}
+
+// ---- obstruction
+
+double cross(Vec2 o, Vec2 a, Vec2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
+
+double signed_area(const std::vector<Vec2>& p) {
+  double a = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Vec2& u = p[i];
+    const Vec2& v = p[(i + 1) % p.size()];
+    a += u.x * v.y - v.x * u.y;
+  }
+  return 0.5 * a;
+}
+
+// Counter-clockwise and strictly convex: every other vertex lies strictly left of
+// every edge. (Checking only consecutive turns would accept a pentagram.)
+bool strictly_convex_ccw(const std::vector<Vec2>& p, double eps) {
+  const std::size_t n = p.size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j)
+      if (j != i && j != (i + 1) % n && cross(p[i], p[(i + 1) % n], p[j]) <= eps) return false;
+  return true;
+}
+
+std::vector<Vec2> read_vertices(Section& s) {
+  const std::string allowed = "must be an array of at least 3 [x, y] number pairs (mm) forming a "
+                              "strictly convex polygon with non-zero area";
+  const toml::node* n = s.get("vertices_mm");
+  if (!n) s.missing("vertices_mm", "required for shape = \"polygon\": " + allowed.substr(8));
+  const toml::array* a = n->as_array();
+  if (!a) s.fail("vertices_mm", *n, allowed);
+  std::vector<Vec2> pts;
+  for (const toml::node& e : *a) {
+    const toml::array* xy = e.as_array();
+    if (!xy || xy->size() != 2 || !(*xy)[0].is_number() || !(*xy)[1].is_number())
+      s.fail("vertices_mm", *n, allowed);
+    Vec2 v{(*xy)[0].value<double>().value(), (*xy)[1].value<double>().value()};
+    if (!std::isfinite(v.x) || !std::isfinite(v.y)) s.fail("vertices_mm", *n, allowed);
+    pts.push_back(v);
+  }
+  if (pts.size() < 3) s.fail("vertices_mm", *n, allowed);
+  double scale = 0;
+  for (const Vec2& v : pts) scale = std::max({scale, std::abs(v.x), std::abs(v.y)});
+  const double eps = 1e-12 * scale * scale;
+  double area = signed_area(pts);
+  if (std::abs(area) <= eps) s.fail("vertices_mm", *n, allowed);
+  if (area < 0) std::reverse(pts.begin(), pts.end());  // accept clockwise input
+  if (!strictly_convex_ccw(pts, eps)) s.fail("vertices_mm", *n, allowed);
+  return pts;
+}
+
+enum class ShapeChoice { none, cylinder, triangle, polygon, A, V };
+
+void apply_shape(ShapeChoice c, ObstructionDef& o) {
+  switch (c) {
+    case ShapeChoice::none: o.shape = ObstructionShape::none; break;
+    case ShapeChoice::cylinder: o.shape = ObstructionShape::cylinder; break;
+    case ShapeChoice::triangle: o.shape = ObstructionShape::triangle; break;
+    case ShapeChoice::polygon: o.shape = ObstructionShape::polygon; break;
+    case ShapeChoice::A: o.shape = ObstructionShape::triangle; o.preset = "A"; o.apex = Apex::away_from_gap; break;
+    case ShapeChoice::V: o.shape = ObstructionShape::triangle; o.preset = "V"; o.apex = Apex::toward_gap; break;
+  }
+}
+
+void read_triangle(Section& s, ObstructionDef& o) {
+  s.number("side_mm", o.side_mm, above(0, "mm"));
+  const toml::node* n = s.get("apex");
+  if (!n) return;
+  const char* names = "one of: away_from_gap, toward_gap";
+  if (!n->is_string()) s.fail("apex", *n, std::string("must be a string, ") + names);
+  const std::string& v = n->as_string()->get();
+  if (v != "away_from_gap" && v != "toward_gap") s.fail("apex", *n, names);
+  Apex apex = v == "toward_gap" ? Apex::toward_gap : Apex::away_from_gap;
+  if (!o.preset.empty() && apex != o.apex)
+    s.fail("apex", *n, fmt::format("must be \"{}\" for shape = \"{}\" (or omit apex)", to_string(o.apex), o.preset));
+  o.apex = apex;
+}
+
+void read_obstruction(Section s, ObstructionDef& o) {
+  auto shape = s.choice<ShapeChoice>("shape", {{"none", ShapeChoice::none},
+                                               {"cylinder", ShapeChoice::cylinder},
+                                               {"triangle", ShapeChoice::triangle},
+                                               {"polygon", ShapeChoice::polygon},
+                                               {"A", ShapeChoice::A},
+                                               {"V", ShapeChoice::V}});
+  if (shape) apply_shape(*shape, o);
+  // Keys of other shapes are ignored so that `--set obstruction.shape=...` works on any file.
+  if (o.shape == ObstructionShape::cylinder) s.number("diameter_mm", o.diameter_mm, above(0, "mm"));
+  else s.ignore("diameter_mm");
+  if (o.shape == ObstructionShape::triangle) read_triangle(s, o);
+  else { s.ignore("side_mm"); s.ignore("apex"); }
+  if (o.shape == ObstructionShape::polygon) o.vertices_mm = read_vertices(s);
+  else s.ignore("vertices_mm");
+  s.number("distance_mm", o.distance_mm, at_least(0, "mm"));
+  if (auto r = s.choice<DistanceReference>("reference", {{"nearest", DistanceReference::nearest},
+                                                         {"centre", DistanceReference::centre},
+                                                         {"center", DistanceReference::centre}}))
+    o.reference = *r;
+  s.number("lateral_offset_mm", o.lateral_offset_mm, any("mm"));
+  s.finish();
+}
+
+void read_shake(Section s, ShakeDef& k) {
+  s.boolean("enabled", k.enabled);
+  s.number("amplitude_mm", k.amplitude_mm, at_least(0, "mm"));
+  s.number("direction_deg", k.direction_deg, any("deg"));
+  s.boolean("mirror", k.mirror);
+  s.number("decay_s", k.decay_s, above(0, "s"));
+  s.number("period_s", k.period_s, above(0, "s"));
+  s.number("start_s", k.start_s, at_least(0, "s"));
+  s.number("frequency_hz", k.frequency_hz, above(0, "Hz"));
+  s.finish();
+  if (k.decay_s > k.period_s)
+    s.fail_value("decay_s", toml_double(k.decay_s),
+                 fmt::format("must be <= {}.period_s ({})", s.path(), toml_double(k.period_s)), "period_s");
+}
+
+void read_shaking(Section s, ShakingDef& k) {
+  Section walls = s.section("walls");
+  Section obstruction = s.section("obstruction");
+  s.finish();
+  read_shake(walls, k.walls);
+  read_shake(obstruction, k.obstruction);
+}
+
+void read_run(Section s, RunDef& r, int particle_count) {
+  if (auto e = s.choice<EndCondition>("end", {{"all_passed", EndCondition::all_passed},
+                                              {"time_limit", EndCondition::time_limit},
+                                              {"n_passed", EndCondition::n_passed}}))
+    r.end = *e;
+  s.number("time_limit_s", r.time_limit_s, above(0, "s"));
+  // 0 is the "unused" default, so that canonical_toml of any end condition reads back.
+  s.integer("n_passed", r.n_passed, 0);
+  s.number("clog_timeout_s", r.clog_timeout_s, above(0, "s"));
+  s.number("stop_after_no_flow_s", r.stop_after_no_flow_s, at_least(0, "s"));
+  if (auto seed = s.integer_value("seed", 0)) r.seed = static_cast<std::uint64_t>(*seed);
+  s.integer("replicate", r.replicate, 0);
+  s.finish();
+
+  if (r.end == EndCondition::n_passed) {
+    std::string need = fmt::format("required when run.end = \"n_passed\": an integer in [1, {}] (particles.count)",
+                                   particle_count);
+    if (!s.set("n_passed")) s.missing("n_passed", need, s.location("end"));
+    if (r.n_passed < 1 || r.n_passed > particle_count) s.fail_value("n_passed", std::to_string(r.n_passed), need);
+  }
+  if (r.stop_after_no_flow_s > 0 && r.stop_after_no_flow_s < r.clog_timeout_s)
+    s.fail_value("stop_after_no_flow_s", toml_double(r.stop_after_no_flow_s),
+                 fmt::format("must be 0 (never) or >= run.clog_timeout_s ({})", toml_double(r.clog_timeout_s)),
+                 "clog_timeout_s");
+}
+
+void read_box2d(Section s, Box2DDef& b) {
+  s.number("time_step_s", b.time_step_s, lower_open(0, 0.1, "s"));
+  s.integer("velocity_iterations", b.velocity_iterations, 1, 1000);
+  s.integer("position_iterations", b.position_iterations, 0, 1000);
+  s.boolean("sleeping", b.sleeping);
+  s.number("engine_diameter", b.engine_diameter, closed(0.05, 20));
+  Section rolling = s.section("rolling");
+  Section base = s.section("base_friction");
+  s.finish();
+
+  rolling.boolean("enabled", b.rolling.enabled);
+  rolling.number("inertia_factor", b.rolling.inertia_factor, lower_open(0, 1));
+  rolling.finish();
+
+  base.boolean("enabled", b.base_friction.enabled);
+  if (auto m = base.choice<BaseFrictionMethod>("method", {{"force", BaseFrictionMethod::force},
+                                                          {"joint", BaseFrictionMethod::joint}}))
+    b.base_friction.method = *m;
+  base.finish();
+}
+
+void read_bullet(Section s, BulletDef& b) {
+  s.number("time_step_s", b.time_step_s, lower_open(0, 0.1, "s"));
+  s.integer("substeps", b.substeps, 1, 100);
+  s.integer("solver_iterations", b.solver_iterations, 1, 1000);
+  s.boolean("sleeping", b.sleeping);
+  s.number("engine_diameter", b.engine_diameter, closed(0.05, 20));
+  s.number("wall_height_d", b.wall_height_d, closed(1.5, 100));
+  s.number("collision_margin_d", b.collision_margin_d, closed(0, 0.5));
+  s.finish();
+}
+
+void read_model(Section s, ModelDef& m) {
+  Section box2d = s.section("box2d");
+  Section bullet = s.section("bullet");
+  s.finish();
+  read_box2d(box2d, m.box2d);
+  read_bullet(bullet, m.bullet);
+}
+
+ScenarioDef read_document(Reader& r, const toml::table& doc) {
+  Section root(r, &doc, "");
+  // All sections are taken first so that a misspelt section is reported before its contents matter.
+  Section scenario = root.section("scenario"), plane = root.section("plane"),
+          bottleneck = root.section("bottleneck"), particles = root.section("particles"),
+          release = root.section("release"), obstruction = root.section("obstruction"),
+          shaking = root.section("shaking"), run = root.section("run"), model = root.section("model");
+  root.finish();
+
+  ScenarioDef d;
+  read_scenario_section(scenario, d);
+  read_plane(plane, d.plane);
+  read_bottleneck(bottleneck, d.bottleneck);
+  read_particles(particles, d.particles);
+  read_release(release, d.release);
+  read_obstruction(obstruction, d.obstruction);
+  read_shaking(shaking, d.shaking);
+  read_run(run, d.run, d.particles.count);
+  read_model(model, d.model);
+  return d;
+}
+
+// ---------------------------------------------------------------- overrides
+
+std::string trim(std::string_view s) {
+  auto b = s.find_first_not_of(" \t");
+  if (b == std::string_view::npos) return {};
+  auto e = s.find_last_not_of(" \t");
+  return std::string(s.substr(b, e - b + 1));
+}
+
+std::vector<std::string> split_key(const std::string& key) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  for (;;) {
+    auto dot = key.find('.', start);
+    parts.push_back(key.substr(start, dot - start));
+    if (dot == std::string::npos) return parts;
+    start = dot + 1;
+  }
+}
+
+bool is_bare_key(const std::string& part) {
+  return !part.empty() && std::all_of(part.begin(), part.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '-';
+  });
+}
+
+// The override value as TOML; anything that is not one TOML value is a bare string.
+toml::table parse_override_value(const std::string& value) {
+  try {
+    toml::table t = toml::parse("v = " + value);
+    if (t.size() == 1 && t.contains("v")) return t;
+  } catch (const toml::parse_error&) {
+  }
+  toml::table t;
+  t.insert("v", value);
+  return t;
+}
+
+void apply_override(toml::table& doc, const std::string& text, int index, Reader& r) {
+  auto eq = text.find('=');
+  if (eq == std::string::npos)
+    throw ScenarioError({"--set", index, 1}, "", "",
+                        fmt::format("override '{}' must have the form key=value", text));
+  std::string key = trim(std::string_view(text).substr(0, eq));
+  std::string_view rest = std::string_view(text).substr(eq + 1);
+  auto lead = std::min(rest.find_first_not_of(" \t"), rest.size());
+  SourceLocation at{"--set", index, static_cast<int>(eq + 2 + lead)};
+  std::vector<std::string> parts = split_key(key);
+  if (!std::all_of(parts.begin(), parts.end(), is_bare_key))
+    throw ScenarioError({"--set", index, 1}, key, trim(rest),
+                        "the key must be dotted, e.g. obstruction.distance_mm");
+
+  toml::table* t = &doc;
+  std::string path;
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+    path = join_dotted(path, parts[i]);
+    if (!t->contains(parts[i])) {
+      t->insert(parts[i], toml::table{});
+      r.overridden[path] = at;
+    }
+    toml::node* n = t->get(parts[i]);
+    if (!n->is_table())
+      throw ScenarioError(at, path, value_text(*n),
+                          fmt::format("must be a table (section [{}]) to set '{}'", path, key));
+    t = n->as_table();
+  }
+  toml::table value = parse_override_value(trim(rest));
+  t->insert_or_assign(parts.back(), *value.get("v"));
+  r.overridden[key] = at;
+}
+
+LoadedScenario parse_with(std::string_view text, std::string source, const std::vector<std::string>& overrides) {
+  Reader r;
+  r.source = source;
+  toml::table doc;
+  try {
+    doc = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    const auto& p = e.source().begin;
+    throw ScenarioError({source, static_cast<int>(std::max(1u, p.line)), static_cast<int>(std::max(1u, p.column))},
+                        "", "", std::string(e.description()));
+  }
+  for (std::size_t i = 0; i < overrides.size(); ++i) apply_override(doc, overrides[i], static_cast<int>(i + 1), r);
+  LoadedScenario out;
+  out.def = read_document(r, doc);
+  out.where = std::move(r.where);
+  out.source = std::move(source);
+  return out;
+}
+
+// ---------------------------------------------------------------- canonical text
+
+class TomlWriter {
+ public:
+  void section(std::string_view name) { out_ += fmt::format("{}[{}]\n", out_.empty() ? "" : "\n", name); }
+  void put(std::string_view key, double v) { line(key, toml_double(v)); }
+  void put(std::string_view key, bool v) { line(key, v ? "true" : "false"); }
+  void put(std::string_view key, int v) { line(key, std::to_string(v)); }
+  void put(std::string_view key, std::uint64_t v) { line(key, std::to_string(v)); }
+  void put(std::string_view key, const std::string& v) { line(key, toml_quote(v)); }
+  void put(std::string_view key, const char* v) { line(key, toml_quote(v)); }
+  void put(std::string_view key, const std::vector<Vec2>& v) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < v.size(); ++i)
+      s += fmt::format("{}[{}, {}]", i ? ", " : "", toml_double(v[i].x), toml_double(v[i].y));
+    line(key, s + "]");
+  }
+  std::string str() && { return std::move(out_); }
+
+ private:
+  void line(std::string_view key, const std::string& value) { out_ += fmt::format("{} = {}\n", key, value); }
+  std::string out_;
+};
+
+void write_shake(TomlWriter& w, std::string_view name, const ShakeDef& k) {
+  w.section(name);
+  w.put("enabled", k.enabled);
+  w.put("amplitude_mm", k.amplitude_mm);
+  w.put("direction_deg", k.direction_deg);
+  w.put("mirror", k.mirror);
+  w.put("decay_s", k.decay_s);
+  w.put("period_s", k.period_s);
+  w.put("start_s", k.start_s);
+  w.put("frequency_hz", k.frequency_hz);
+}
+
+void write_head(TomlWriter& w, const ScenarioDef& d) {
+  w.section("scenario");
+  w.put("name", d.name);
+  w.put("description", d.description);
+  w.section("plane");
+  w.put("incline_deg", d.plane.incline_deg);
+  w.put("length_mm", d.plane.length_mm);
+  w.put("width_mm", d.plane.width_mm);
+  w.section("bottleneck");
+  w.put("wall_angle_deg", d.bottleneck.wall_angle_deg);
+  w.put("gap_mm", d.bottleneck.gap_mm);
+  w.put("wall_thickness_mm", d.bottleneck.wall_thickness_mm);
+}
+
+void write_particles(TomlWriter& w, const ParticlesDef& p, const ReleaseDef& r) {
+  w.section("particles");
+  w.put("count", p.count);
+  w.put("diameter_mm", p.diameter_mm);
+  w.put("size_scatter", p.size_scatter);
+  w.put("size_distribution", to_string(p.size_distribution));
+  w.put("density_kg_m3", p.density_kg_m3);
+  w.put("friction_particle", p.friction_particle);
+  w.put("friction_wall", p.friction_wall);
+  w.put("friction_base", p.friction_base);
+  w.put("restitution", p.restitution);
+  w.put("rolling_resistance", p.rolling_resistance);
+  w.put("spinning_friction_mm", p.spinning_friction_mm);
+  w.section("release");
+  w.put("barrier_mm", r.barrier_mm);
+  w.put("settle_s", r.settle_s);
+  w.put("lattice_gap", r.lattice_gap);
+}
+
+void write_obstruction(TomlWriter& w, const ObstructionDef& o) {
+  w.section("obstruction");
+  // The preset is spelt as the shape so that it survives the round trip.
+  bool preset = o.shape == ObstructionShape::triangle && (o.preset == "A" || o.preset == "V");
+  w.put("shape", preset ? o.preset : std::string(to_string(o.shape)));
+  w.put("diameter_mm", o.diameter_mm);
+  w.put("side_mm", o.side_mm);
+  w.put("apex", to_string(o.apex));
+  w.put("vertices_mm", o.vertices_mm);
+  w.put("distance_mm", o.distance_mm);
+  w.put("reference", to_string(o.reference));
+  w.put("lateral_offset_mm", o.lateral_offset_mm);
+}
+
+void write_run(TomlWriter& w, const RunDef& r) {
+  w.section("run");
+  w.put("end", to_string(r.end));
+  w.put("time_limit_s", r.time_limit_s);
+  w.put("n_passed", r.n_passed);
+  w.put("clog_timeout_s", r.clog_timeout_s);
+  w.put("stop_after_no_flow_s", r.stop_after_no_flow_s);
+  w.put("seed", r.seed);
+  w.put("replicate", r.replicate);
+}
+
+void write_model(TomlWriter& w, const ModelDef& m) {
+  w.section("model.box2d");
+  w.put("time_step_s", m.box2d.time_step_s);
+  w.put("velocity_iterations", m.box2d.velocity_iterations);
+  w.put("position_iterations", m.box2d.position_iterations);
+  w.put("sleeping", m.box2d.sleeping);
+  w.put("engine_diameter", m.box2d.engine_diameter);
+  w.section("model.box2d.rolling");
+  w.put("enabled", m.box2d.rolling.enabled);
+  w.put("inertia_factor", m.box2d.rolling.inertia_factor);
+  w.section("model.box2d.base_friction");
+  w.put("enabled", m.box2d.base_friction.enabled);
+  w.put("method", to_string(m.box2d.base_friction.method));
+  w.section("model.bullet");
+  w.put("time_step_s", m.bullet.time_step_s);
+  w.put("substeps", m.bullet.substeps);
+  w.put("solver_iterations", m.bullet.solver_iterations);
+  w.put("sleeping", m.bullet.sleeping);
+  w.put("engine_diameter", m.bullet.engine_diameter);
+  w.put("wall_height_d", m.bullet.wall_height_d);
+  w.put("collision_margin_d", m.bullet.collision_margin_d);
+}
+
+}  // namespace
+
+LoadedScenario parse_scenario(std::string_view text, std::string_view source_name,
+                              const std::vector<std::string>& overrides) {
+  return parse_with(text, std::string(source_name), overrides);
+}
+
+LoadedScenario load_scenario(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the scenario file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_with(text.str(), file.string(), overrides);
+}
+
+ScenarioError locate(const ScenarioInvalid& e, const LoadedScenario& s) {
+  if (auto it = s.where.find(e.key); it != s.where.end()) return ScenarioError(it->second, e.key, e.value, e.allowed);
+  // Not set anywhere: the value is a default; point at the nearest enclosing section.
+  std::string value = e.value.empty() ? e.value : e.value + " (default)";
+  for (std::string k = e.key; !k.empty();) {
+    auto dot = k.rfind('.');
+    k = dot == std::string::npos ? std::string() : k.substr(0, dot);
+    if (auto it = s.where.find(k); !k.empty() && it != s.where.end())
+      return ScenarioError(it->second, e.key, value, e.allowed);
+  }
+  return ScenarioError({s.source, 1, 1}, e.key, value, e.allowed);
+}
+
+std::string canonical_toml(const ScenarioDef& def) {
+  TomlWriter w;
+  write_head(w, def);
+  write_particles(w, def.particles, def.release);
+  write_obstruction(w, def.obstruction);
+  write_shake(w, "shaking.walls", def.shaking.walls);
+  write_shake(w, "shaking.obstruction", def.shaking.obstruction);
+  write_run(w, def.run);
+  write_model(w, def.model);
+  return std::move(w).str();
+}
+
+std::uint64_t scenario_hash(const ScenarioDef& def) {
+  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a 64 offset basis
+  for (unsigned char c : canonical_toml(def)) {
+    h ^= c;
+    h *= 0x100000001b3ull;  // FNV-1a 64 prime
+  }
+  // FNV-1a mixes its last bytes poorly; one SplitMix64 round spreads them.
+  return splitmix64(h);
+}
+
+}  // namespace gapflow

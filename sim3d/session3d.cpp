@@ -1,0 +1,613 @@
+// Session3D: builds a Bullet world from a CompiledScenario and steps it.
+//
+// Sections: materials (pair look-up installed into Bullet's combiner hooks),
+// shapes (prisms extruded from the plane-frame polygons), bodies, the session's
+// stages (build, step, report, retire) and the test extras.
+#include "sim3d/session3d.hpp"
+
+#include "sim3d/model3d.hpp"
+
+#include <btBulletDynamicsCommon.h>
+#include <BulletCollision/CollisionDispatch/btManifoldResult.h>
+
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+
+namespace gapflow {
+
+// Types live in a named namespace: Session3D::World (external linkage) holds them.
+namespace bullet3d {
+
+// ---------------------------------------------------------------------------
+// Materials
+// ---------------------------------------------------------------------------
+
+// Marks (userIndex3) the bodies made here, so the combiner hooks leave any
+// other Bullet user in the process on Bullet's own rules.
+constexpr int kSessionBodyTag = 0x3D6A;
+
+// Engine mass of a sphere of the nominal diameter. Only mass ratios matter
+// (walls and board are immovable), but Bullet caps the rolling/spinning torque
+// impulse at rf * min(normal impulse, 1) (btSequentialImpulseConstraintSolver),
+// so impulses must stay far below 1: with 1e-3 a pile of 10^4 spheres leaning
+// on one contact still gives ~0.3 per step.
+constexpr double kNominalMass = 1e-3;
+
+// Pair values in engine units, looked up by surface kind.
+struct MaterialTable {
+  double friction[3][3] = {};   // Coulomb, [kind a][kind b]
+  double restitution = 0;       // every pair
+  double rolling_resistance = 0;// dimensionless; rolling friction = this * effective radius
+  double spinning = 0;          // engine length, every pair
+  // Bullet only builds the spinning constraint when the rolling value is > 0;
+  // this keeps it on when spinning friction is set but rolling resistance is 0.
+  double rolling_floor = 0;     // engine length
+};
+
+Surface3D kind_of(const btCollisionObject* o) { return static_cast<Surface3D>(o->getUserIndex()); }
+
+double sphere_radius(const btCollisionObject* o) {
+  const btCollisionShape* s = o->getCollisionShape();
+  if (s->getShapeType() != SPHERE_SHAPE_PROXYTYPE) return 0;
+  return static_cast<const btSphereShape*>(s)->getRadius();
+}
+
+// Radius of the rolling contact: the sphere's against a wall or the board; the
+// reduced radius r1 r2 / (r1 + r2) between two spheres (usual DEM convention).
+double rolling_radius(Surface3D ka, double ra, Surface3D kb, double rb) {
+  const bool pa = ka == Surface3D::particle, pb = kb == Surface3D::particle;
+  if (pa && pb) return ra * rb / (ra + rb);
+  return pa ? ra : (pb ? rb : 0.0);
+}
+
+struct PairEngine {
+  double friction, restitution, rolling, spinning;  // rolling, spinning: engine length
+};
+
+PairEngine pair_values(const MaterialTable& t, Surface3D ka, double ra, Surface3D kb, double rb) {
+  PairEngine p{};
+  p.friction = t.friction[static_cast<int>(ka)][static_cast<int>(kb)];
+  p.restitution = t.restitution;
+  p.rolling = t.rolling_resistance * rolling_radius(ka, ra, kb, rb);
+  p.spinning = t.spinning;
+  if (p.rolling <= 0 && p.spinning > 0) p.rolling = t.rolling_floor;
+  return p;
+}
+
+const MaterialTable* table_of(const btCollisionObject* a, const btCollisionObject* b) {
+  if (a->getUserIndex3() != kSessionBodyTag || b->getUserIndex3() != kSessionBodyTag) return nullptr;
+  return static_cast<const MaterialTable*>(a->getUserPointer());
+}
+
+PairEngine pair_of(const MaterialTable& t, const btCollisionObject* a, const btCollisionObject* b) {
+  return pair_values(t, kind_of(a), sphere_radius(a), kind_of(b), sphere_radius(b));
+}
+
+// Bullet's combiner hooks (btManifoldResult.h), called when a contact point is
+// created. They replace the product rules (mu_a mu_b, e_a e_b, rf_a mu_b + rf_b mu_a)
+// that cannot express an arbitrary pair table (e.g. mu_pp = 0 with mu_pw > 0).
+btScalar combined_friction(const btCollisionObject* a, const btCollisionObject* b) {
+  const MaterialTable* t = table_of(a, b);
+  return t ? btScalar(pair_of(*t, a, b).friction) : btManifoldResult::calculateCombinedFriction(a, b);
+}
+btScalar combined_restitution(const btCollisionObject* a, const btCollisionObject* b) {
+  const MaterialTable* t = table_of(a, b);
+  return t ? btScalar(pair_of(*t, a, b).restitution) : btManifoldResult::calculateCombinedRestitution(a, b);
+}
+btScalar combined_rolling(const btCollisionObject* a, const btCollisionObject* b) {
+  const MaterialTable* t = table_of(a, b);
+  return t ? btScalar(pair_of(*t, a, b).rolling) : btManifoldResult::calculateCombinedRollingFriction(a, b);
+}
+btScalar combined_spinning(const btCollisionObject* a, const btCollisionObject* b) {
+  const MaterialTable* t = table_of(a, b);
+  return t ? btScalar(pair_of(*t, a, b).spinning) : btManifoldResult::calculateCombinedSpinningFriction(a, b);
+}
+
+// The hooks are process globals; they are stateless (the table comes from the
+// bodies), so installing them once serves every session, also in parallel runs.
+void install_combiner_hooks() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    gCalculateCombinedFrictionCallback = &combined_friction;
+    gCalculateCombinedRestitutionCallback = &combined_restitution;
+    gCalculateCombinedRollingFrictionCallback = &combined_rolling;
+    gCalculateCombinedSpinningFrictionCallback = &combined_spinning;
+  });
+}
+
+MaterialTable make_materials(const ParticlesDef& p, const EngineScaling& s) {
+  MaterialTable t;
+  const int P = static_cast<int>(Surface3D::particle), B = static_cast<int>(Surface3D::board),
+            W = static_cast<int>(Surface3D::wall);
+  t.friction[P][P] = p.friction_particle;
+  t.friction[P][W] = t.friction[W][P] = p.friction_wall;
+  t.friction[P][B] = t.friction[B][P] = p.friction_base;
+  t.restitution = p.restitution;
+  t.rolling_resistance = p.rolling_resistance;
+  t.spinning = s.to_engine_length(mm_to_m(p.spinning_friction_mm));
+  t.rolling_floor = 1e-12 * s.length;  // a rolling torque far below anything measurable
+  return t;
+}
+
+// ---------------------------------------------------------------------------
+// Shapes: prisms extruded normal to the board
+// ---------------------------------------------------------------------------
+
+struct Point2 {
+  double x, y;
+};
+
+// A polygon moved inward by `m` (edges offset along their normals). Bullet
+// inflates hulls by their margin, so shrinking first puts the faces where the
+// scenario says (corners become rounded with radius m).
+std::vector<Point2> shrink_convex(const std::vector<Point2>& v, double m) {
+  const size_t n = v.size();
+  std::vector<Point2> out(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Point2 a = v[(i + n - 1) % n], b = v[i], c = v[(i + 1) % n];
+    // Inward normals (counter-clockwise polygon: interior on the left).
+    auto normal = [](Point2 p, Point2 q) {
+      const double ex = q.x - p.x, ey = q.y - p.y, len = std::hypot(ex, ey);
+      return Point2{-ey / len, ex / len};
+    };
+    const Point2 n1 = normal(a, b), n2 = normal(b, c);
+    // Solve n1.p = n1.b + m and n2.p = n2.b + m for p = b + q.
+    const double det = n1.x * n2.y - n1.y * n2.x;
+    const double qx = (m * n2.y - n1.y * m) / det, qy = (n1.x * m - m * n2.x) / det;
+    out[i] = {b.x + qx, b.y + qy};
+  }
+  return out;
+}
+
+bool is_rectangle(const std::vector<Point2>& v) {
+  if (v.size() != 4) return false;
+  for (size_t i = 0; i < 4; ++i) {
+    const Point2 a = v[i], b = v[(i + 1) % 4], c = v[(i + 2) % 4];
+    const double ux = b.x - a.x, uy = b.y - a.y, wx = c.x - b.x, wy = c.y - b.y;
+    if (std::abs(ux * wx + uy * wy) > 1e-9 * (ux * ux + uy * uy + wx * wx + wy * wy)) return false;
+  }
+  return true;
+}
+
+// A collision shape and where its local origin sits in the world (engine units).
+struct PlacedShape {
+  std::unique_ptr<btCollisionShape> shape;
+  btTransform pose;
+};
+
+// Right prism over a convex polygon (engine units), from z0 to z1.
+PlacedShape make_prism(const std::vector<Point2>& poly, double z0, double z1, double margin) {
+  double cx = 0, cy = 0;
+  for (Point2 p : poly) cx += p.x / poly.size(), cy += p.y / poly.size();
+  const double zc = (z0 + z1) / 2, hz = (z1 - z0) / 2;
+  PlacedShape out;
+  out.pose.setIdentity();
+  out.pose.setOrigin(btVector3(cx, cy, zc));
+  if (is_rectangle(poly)) {
+    // A box: exact sphere-box contacts, robust against deep penetration.
+    const double ex = poly[1].x - poly[0].x, ey = poly[1].y - poly[0].y;
+    const double len0 = std::hypot(ex, ey);
+    const double len1 = std::hypot(poly[2].x - poly[1].x, poly[2].y - poly[1].y);
+    auto box = std::make_unique<btBoxShape>(btVector3(len0 / 2, len1 / 2, hz));
+    box->setMargin(margin);  // btBoxShape keeps its outer extents when the margin changes
+    out.pose.setRotation(btQuaternion(btVector3(0, 0, 1), std::atan2(ey, ex)));
+    out.shape = std::move(box);
+    return out;
+  }
+  auto hull = std::make_unique<btConvexHullShape>();
+  for (Point2 p : shrink_convex(poly, margin)) {
+    hull->addPoint(btVector3(p.x - cx, p.y - cy, -hz + margin), false);
+    hull->addPoint(btVector3(p.x - cx, p.y - cy, hz - margin), false);
+  }
+  hull->recalcLocalAabb();
+  hull->setMargin(margin);
+  out.shape = std::move(hull);
+  return out;
+}
+
+std::vector<Point2> to_engine(const ConvexPolygon& p, const EngineScaling& s) {
+  std::vector<Point2> v;
+  for (Vec2 q : p.vertices) v.push_back({s.to_engine_length(q.x), s.to_engine_length(q.y)});
+  return v;
+}
+
+// Moves a kinematic body: Bullet reads this at the start of each stepSimulation,
+// places the body there and gives it the velocity (target - previous) / dt.
+struct KinematicMotion : btMotionState {
+  btTransform target;
+  void getWorldTransform(btTransform& t) const override { t = target; }
+  void setWorldTransform(const btTransform&) override {}  // Bullet never drives a kinematic body
+};
+
+// ---------------------------------------------------------------------------
+// World
+// ---------------------------------------------------------------------------
+
+struct KinematicBody {
+  std::unique_ptr<btCollisionShape> shape;
+  std::unique_ptr<KinematicMotion> motion;
+  std::unique_ptr<btRigidBody> body;
+  btTransform rest;
+  Vec2 offset_from{};  // m, offset at the start of the current step
+};
+
+}  // namespace bullet3d
+
+struct Session3D::World {
+  // Copied scenario values (the session does not keep a reference to the scenario).
+  EngineScaling scale;
+  double time_step_lab = 0;  // s
+  int substeps = 1;
+  double dt_engine = 0;      // engine s per substep
+  double nominal_d = 0;      // m
+  double time_lab = 0;       // s, advanced by step()
+  bool sleeping = false;
+  bullet3d::MaterialTable materials;
+  ShakeOffsets target{};
+
+  // Bullet objects; the world must be destroyed after every body is removed (see ~World).
+  btDefaultCollisionConfiguration config;
+  btCollisionDispatcher dispatcher{&config};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
+
+  std::vector<std::unique_ptr<btCollisionShape>> static_shapes;
+  std::vector<std::unique_ptr<btRigidBody>> static_bodies;  // board, retaining walls, top wall
+  std::unique_ptr<btCollisionShape> barrier_shape;
+  std::unique_ptr<btRigidBody> barrier;
+  bool barrier_in_world = false;
+  bullet3d::KinematicBody left_wall, right_wall, obstruction;
+  bool has_obstruction = false;
+  std::vector<std::unique_ptr<btSphereShape>> sphere_shapes;
+  std::vector<std::unique_ptr<btRigidBody>> particles;  // index = particle id; null once retired
+  int alive = 0;
+
+  ~World() {
+    for (int i = world.getNumCollisionObjects() - 1; i >= 0; --i)
+      world.removeCollisionObject(world.getCollisionObjectArray()[i]);
+  }
+
+  void tag(btRigidBody& b, Surface3D kind, int id) {
+    b.setUserIndex(static_cast<int>(kind));
+    b.setUserIndex2(id);
+    b.setUserIndex3(bullet3d::kSessionBodyTag);
+    b.setUserPointer(&materials);
+  }
+};
+
+namespace {
+
+using namespace bullet3d;
+using World3D = Session3D::World;
+
+// --- Build stages ------------------------------------------------------------
+
+void configure_world(World3D& w, const CompiledScenario& sc) {
+  const BulletDef& b = sc.def.model.bullet;
+  w.scale = EngineScaling::froude(sc.nominal_diameter, b.engine_diameter);
+  w.time_step_lab = b.time_step_s;
+  w.substeps = b.substeps;
+  w.dt_engine = w.scale.to_engine_time(b.time_step_s) / b.substeps;
+  w.nominal_d = sc.nominal_diameter;
+  w.sleeping = b.sleeping;
+  w.materials = make_materials(sc.def.particles, w.scale);
+
+  // Tilted gravity, axis-aligned geometry: Froude scaling keeps g = 9.81 engine units.
+  const double g = w.scale.to_engine_acceleration(kStandardGravity);
+  w.world.setGravity(btVector3(0, -g * std::sin(sc.incline), -g * std::cos(sc.incline)));
+
+  btContactSolverInfo& info = w.world.getSolverInfo();
+  info.m_numIterations = b.solver_iterations;
+  // Two friction directions per contact: with one, a sphere rolling without slip
+  // (zero contact velocity) gets an arbitrary single direction and can slip sideways.
+  info.m_solverMode |= SOLVER_USE_2_FRICTION_DIRECTIONS;
+  const double d_e = b.engine_diameter;
+  const double v_ref = std::sqrt(g * d_e);  // engine velocity scale sqrt(g d)
+  // Slower impacts are inelastic (Bullet's default 0.2 is in engine m/s; tie it to the grain scale).
+  info.m_restitutionVelocityThreshold = 0.05 * v_ref;
+  // Split impulse (on by default) resolves penetration deeper than this without adding energy.
+  info.m_splitImpulsePenetrationThreshold = -0.04 * d_e;
+}
+
+void add_static(World3D& w, PlacedShape placed, Surface3D kind) {
+  btRigidBody::btRigidBodyConstructionInfo ci(0, nullptr, placed.shape.get());
+  ci.m_startWorldTransform = placed.pose;
+  auto body = std::make_unique<btRigidBody>(ci);
+  w.tag(*body, kind, -1);
+  w.world.addRigidBody(body.get());
+  w.static_shapes.push_back(std::move(placed.shape));
+  w.static_bodies.push_back(std::move(body));
+}
+
+void add_board(World3D& w) {
+  // The board is the half-space z <= 0, unbounded: a sphere that leaves over a
+  // wall keeps rolling and the gap monitor sees it cross y = 0 outside the gap.
+  PlacedShape board;
+  board.shape = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);
+  board.pose.setIdentity();
+  add_static(w, std::move(board), Surface3D::board);
+}
+
+void make_kinematic(World3D& w, KinematicBody& k, PlacedShape placed) {
+  k.rest = placed.pose;
+  k.motion = std::make_unique<KinematicMotion>();
+  k.motion->target = k.rest;
+  k.shape = std::move(placed.shape);
+  btRigidBody::btRigidBodyConstructionInfo ci(0, k.motion.get(), k.shape.get());
+  k.body = std::make_unique<btRigidBody>(ci);
+  k.body->setCollisionFlags(k.body->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+  k.body->setActivationState(DISABLE_DEACTIVATION);
+  w.tag(*k.body, Surface3D::wall, -1);
+  w.world.addRigidBody(k.body.get());
+}
+
+void add_walls(World3D& w, const CompiledScenario& sc) {
+  const BulletDef& b = sc.def.model.bullet;
+  const double d_e = b.engine_diameter;
+  const double z0 = -d_e, z1 = b.wall_height_d * d_e;  // walls reach below the board: no seam at the foot
+  const double margin = b.collision_margin_d * d_e;
+  auto prism = [&](const ConvexPolygon& p) { return make_prism(to_engine(p, w.scale), z0, z1, margin); };
+  add_static(w, prism(sc.left_retaining_wall), Surface3D::wall);
+  add_static(w, prism(sc.right_retaining_wall), Surface3D::wall);
+  add_static(w, prism(sc.top_wall), Surface3D::wall);
+  make_kinematic(w, w.left_wall, prism(sc.left_bottleneck_wall));
+  make_kinematic(w, w.right_wall, prism(sc.right_bottleneck_wall));
+
+  PlacedShape barrier = prism(sc.barrier);
+  btRigidBody::btRigidBodyConstructionInfo ci(0, nullptr, barrier.shape.get());
+  ci.m_startWorldTransform = barrier.pose;
+  w.barrier_shape = std::move(barrier.shape);
+  w.barrier = std::make_unique<btRigidBody>(ci);
+  w.tag(*w.barrier, Surface3D::wall, -1);
+}
+
+void add_obstruction(World3D& w, const CompiledScenario& sc) {
+  const ObstructionGeometry& g = sc.obstruction;
+  if (g.shape == ObstructionShape::none) return;
+  const BulletDef& b = sc.def.model.bullet;
+  const double d_e = b.engine_diameter;
+  const double z0 = -d_e, z1 = b.wall_height_d * d_e, margin = b.collision_margin_d * d_e;
+  PlacedShape placed;
+  if (g.shape == ObstructionShape::cylinder) {
+    const double R = w.scale.to_engine_length(g.circle.radius);
+    auto cyl = std::make_unique<btCylinderShapeZ>(btVector3(R, R, (z1 - z0) / 2));
+    cyl->setMargin(margin);  // like boxes, cylinders keep their outer size
+    placed.shape = std::move(cyl);
+    placed.pose.setIdentity();
+    placed.pose.setOrigin(btVector3(w.scale.to_engine_length(g.circle.centre.x),
+                                    w.scale.to_engine_length(g.circle.centre.y), (z0 + z1) / 2));
+  } else {
+    placed = make_prism(to_engine(g.polygon, w.scale), z0, z1, margin);
+  }
+  make_kinematic(w, w.obstruction, std::move(placed));
+  w.has_obstruction = true;
+}
+
+void add_particles(World3D& w, const CompiledScenario& sc) {
+  const double lin = 0.01 * std::sqrt(kStandardGravity * sc.def.model.bullet.engine_diameter);
+  for (size_t i = 0; i < sc.particles.size(); ++i) {
+    const ParticleSeed& seed = sc.particles[i];
+    const double r = w.scale.to_engine_length(seed.diameter / 2);
+    auto shape = std::make_unique<btSphereShape>(r);  // margin = radius: the sphere is exact
+    const double ratio = seed.diameter / sc.nominal_diameter;
+    const double mass = kNominalMass * ratio * ratio * ratio;  // same density for all spheres
+    btVector3 inertia;
+    shape->calculateLocalInertia(mass, inertia);  // 2/5 m r^2
+    btRigidBody::btRigidBodyConstructionInfo ci(mass, nullptr, shape.get(), inertia);
+    ci.m_startWorldTransform.setIdentity();
+    ci.m_startWorldTransform.setOrigin(btVector3(w.scale.to_engine_length(seed.position.x),
+                                                 w.scale.to_engine_length(seed.position.y), r));
+    auto body = std::make_unique<btRigidBody>(ci);
+    w.tag(*body, Surface3D::particle, static_cast<int>(i));
+    if (w.sleeping) {
+      body->setSleepingThresholds(lin, lin / r);  // scaled to the grain: ~1 % of sqrt(g d)
+    } else {
+      body->setActivationState(DISABLE_DEACTIVATION);  // Bullet's defaults would freeze slow flow
+    }
+    w.world.addRigidBody(body.get());
+    w.sphere_shapes.push_back(std::move(shape));
+    w.particles.push_back(std::move(body));
+  }
+  w.alive = static_cast<int>(sc.particles.size());
+}
+
+// --- Step stages -------------------------------------------------------------
+
+Vec2 lerp(Vec2 a, Vec2 b, double f) { return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f}; }
+
+void place_kinematic(const World3D& w, KinematicBody& k, Vec2 offset) {
+  if (!k.body) return;
+  btTransform t = k.rest;
+  t.setOrigin(t.getOrigin() +
+              btVector3(w.scale.to_engine_length(offset.x), w.scale.to_engine_length(offset.y), 0));
+  k.motion->target = t;
+}
+
+btRigidBody& particle(const World3D& w, int id) {
+  if (id < 0 || id >= static_cast<int>(w.particles.size()) || !w.particles[id])
+    throw std::out_of_range("Session3D: no active particle " + std::to_string(id));
+  return *w.particles[id];
+}
+
+Vec3Lab scaled(const btVector3& v, double factor) { return {v.x() * factor, v.y() * factor, v.z() * factor}; }
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Session
+// ---------------------------------------------------------------------------
+
+Session3D::Session3D(const CompiledScenario& scenario) : w_(std::make_unique<World>()) {
+  install_combiner_hooks();
+  configure_world(*w_, scenario);
+  add_board(*w_);
+  add_walls(*w_, scenario);
+  add_obstruction(*w_, scenario);
+  add_particles(*w_, scenario);
+}
+
+Session3D::~Session3D() = default;
+
+double Session3D::time_step() const { return w_->time_step_lab; }
+
+void Session3D::set_barrier(bool closed) {
+  if (closed == w_->barrier_in_world) return;
+  if (closed) {
+    w_->world.addRigidBody(w_->barrier.get());
+  } else {
+    w_->world.removeRigidBody(w_->barrier.get());
+  }
+  w_->barrier_in_world = closed;
+}
+
+void Session3D::set_shake_targets(const ShakeOffsets& offsets_at_end_of_step) {
+  w_->target = offsets_at_end_of_step;
+}
+
+// One step = `substeps` Bullet steps of fixed length. Kinematic bodies are moved
+// along a straight line so that they sit exactly on the target at the end.
+void Session3D::step() {
+  World& w = *w_;
+  const ShakeOffsets& to = w.target;
+  for (int s = 1; s <= w.substeps; ++s) {
+    const double f = static_cast<double>(s) / w.substeps;
+    // Stage 1: where the kinematic bodies must be at the end of this substep.
+    place_kinematic(w, w.left_wall, lerp(w.left_wall.offset_from, to.left_wall, f));
+    place_kinematic(w, w.right_wall, lerp(w.right_wall.offset_from, to.right_wall, f));
+    place_kinematic(w, w.obstruction, lerp(w.obstruction.offset_from, to.obstruction, f));
+    // Stage 2: integrate. maxSubSteps = 0 makes Bullet step exactly dt (no
+    // fixed-step accumulator that could drop or add time).
+    w.world.stepSimulation(btScalar(w.dt_engine), 0, btScalar(w.dt_engine));
+  }
+  // Stage 3: bookkeeping.
+  w.left_wall.offset_from = to.left_wall;
+  w.right_wall.offset_from = to.right_wall;
+  w.obstruction.offset_from = to.obstruction;
+  w.time_lab += w.time_step_lab;
+}
+
+void Session3D::zero_velocities() {
+  for (auto& p : w_->particles) {
+    if (!p) continue;
+    p->setLinearVelocity(btVector3(0, 0, 0));
+    p->setAngularVelocity(btVector3(0, 0, 0));
+  }
+}
+
+// Every simulated sphere is reported, also one below the board (z < -d) or
+// outside the walls: the gap monitor decides what an escape is.
+void Session3D::active_particles(std::vector<ActiveParticle>& out) const {
+  out.clear();
+  out.reserve(w_->alive);
+  const double to_m = 1.0 / w_->scale.length;
+  for (size_t i = 0; i < w_->particles.size(); ++i) {
+    const btRigidBody* p = w_->particles[i].get();
+    if (!p) continue;
+    const btVector3& o = p->getCenterOfMassPosition();
+    out.push_back({static_cast<int>(i), {o.x() * to_m, o.y() * to_m}});
+  }
+}
+
+void Session3D::retire(const std::vector<int>& ids) {
+  for (int id : ids) {
+    if (id < 0 || id >= static_cast<int>(w_->particles.size()) || !w_->particles[id]) continue;
+    w_->world.removeRigidBody(w_->particles[id].get());
+    w_->particles[id].reset();
+    w_->sphere_shapes[id].reset();
+    --w_->alive;
+  }
+}
+
+// --- Extras ------------------------------------------------------------------
+
+const EngineScaling& Session3D::scaling() const { return w_->scale; }
+int Session3D::body_count() const { return w_->world.getNumCollisionObjects(); }
+int Session3D::particle_count() const { return w_->alive; }
+double Session3D::time() const { return w_->time_lab; }
+
+bool Session3D::is_active(int id) const {
+  return id >= 0 && id < static_cast<int>(w_->particles.size()) && w_->particles[id] != nullptr;
+}
+
+Vec3Lab Session3D::position(int id) const {
+  return scaled(particle(*w_, id).getCenterOfMassPosition(), 1.0 / w_->scale.length);
+}
+Vec3Lab Session3D::velocity(int id) const {
+  return scaled(particle(*w_, id).getLinearVelocity(), w_->scale.to_lab_velocity(1.0));
+}
+Vec3Lab Session3D::angular_velocity(int id) const {
+  // rad per engine second -> rad per lab second: one lab second is `time` engine seconds.
+  return scaled(particle(*w_, id).getAngularVelocity(), w_->scale.time);
+}
+double Session3D::radius(int id) const {
+  return w_->scale.to_lab_length(sphere_radius(&particle(*w_, id)));
+}
+
+void Session3D::place(int id, Vec3Lab c, Vec3Lab v) {
+  btRigidBody& b = particle(*w_, id);
+  const EngineScaling& s = w_->scale;
+  btTransform t;
+  t.setIdentity();
+  t.setOrigin(btVector3(s.to_engine_length(c.x), s.to_engine_length(c.y), s.to_engine_length(c.z)));
+  b.setWorldTransform(t);
+  b.setInterpolationWorldTransform(t);
+  b.setLinearVelocity(btVector3(s.to_engine_velocity(v.x), s.to_engine_velocity(v.y), s.to_engine_velocity(v.z)));
+  b.setAngularVelocity(btVector3(0, 0, 0));
+  b.setInterpolationLinearVelocity(b.getLinearVelocity());
+  b.setInterpolationAngularVelocity(btVector3(0, 0, 0));
+  b.activate(true);
+}
+
+PairMaterial3D Session3D::pair_material(Surface3D other, int a, int b) const {
+  const double ra = sphere_radius(&particle(*w_, a));
+  const double rb = other == Surface3D::particle ? sphere_radius(&particle(*w_, b)) : 0.0;
+  const PairEngine p = pair_values(w_->materials, Surface3D::particle, ra, other, rb);
+  const EngineScaling& s = w_->scale;
+  return {p.friction, p.restitution, s.to_lab_length(p.rolling), s.to_lab_length(p.spinning)};
+}
+
+std::vector<ContactInfo3D> Session3D::contacts() const {
+  std::vector<ContactInfo3D> out;
+  const EngineScaling& s = w_->scale;
+  btDispatcher& d = const_cast<btCollisionDispatcher&>(w_->dispatcher);
+  for (int m = 0; m < d.getNumManifolds(); ++m) {
+    const btPersistentManifold* man = d.getManifoldByIndexInternal(m);
+    const btCollisionObject* a = man->getBody0();
+    const btCollisionObject* b = man->getBody1();
+    if (kind_of(a) != Surface3D::particle) std::swap(a, b);
+    for (int k = 0; k < man->getNumContacts(); ++k) {
+      const btManifoldPoint& cp = man->getContactPoint(k);
+      ContactInfo3D c;
+      c.a = kind_of(a);
+      c.b = kind_of(b);
+      c.particle_a = c.a == Surface3D::particle ? a->getUserIndex2() : -1;
+      c.particle_b = c.b == Surface3D::particle ? b->getUserIndex2() : -1;
+      c.material = {cp.m_combinedFriction, cp.m_combinedRestitution, s.to_lab_length(cp.m_combinedRollingFriction),
+                    s.to_lab_length(cp.m_combinedSpinningFriction)};
+      c.distance = s.to_lab_length(cp.getDistance());
+      out.push_back(c);
+    }
+  }
+  return out;
+}
+
+Vec2 Session3D::bottleneck_offset(bool right) const {
+  const KinematicBody& k = right ? w_->right_wall : w_->left_wall;
+  const btVector3 d = k.body->getWorldTransform().getOrigin() - k.rest.getOrigin();
+  return {w_->scale.to_lab_length(d.x()), w_->scale.to_lab_length(d.y())};
+}
+
+Vec2 Session3D::obstruction_offset() const {
+  if (!w_->has_obstruction) return {};
+  const KinematicBody& k = w_->obstruction;
+  const btVector3 d = k.body->getWorldTransform().getOrigin() - k.rest.getOrigin();
+  return {w_->scale.to_lab_length(d.x()), w_->scale.to_lab_length(d.y())};
+}
+
+std::unique_ptr<EngineSession> make_session_3d(const CompiledScenario& scenario) {
+  return std::make_unique<Session3D>(scenario);
+}
+
+}  // namespace gapflow

@@ -1,0 +1,254 @@
+// Fast tests of the 3D model (Bullet): single-sphere mechanics against the
+// closed-form answers, pair materials, determinism and a small discharge.
+#include "sim3d/model3d.hpp"
+#include "sim3d/session3d.hpp"
+
+#include "common/simulation.hpp"
+#include "common/units.hpp"
+#include "tests/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace gapflow {
+namespace {
+
+using testing::compile_text;
+
+// A wide open board with one sphere and no settling; the sphere is placed by
+// hand. Overrides are "section.key=value".
+CompiledScenario one_sphere(const std::vector<std::string>& overrides = {}) {
+  const std::string toml =
+      "[scenario]\nname = \"sim3d single sphere\"\n"
+      "[plane]\nlength_mm = 600.0\nwidth_mm = 400.0\n"
+      "[bottleneck]\ngap_mm = 300.0\n"
+      "[particles]\ncount = 1\nsize_scatter = 0.0\n"
+      "[release]\nsettle_s = 0.0\n";
+  return compile_text(toml, overrides);
+}
+
+void run_for(Session3D& s, double seconds) {
+  const long n = std::lround(seconds / s.time_step());
+  for (long i = 0; i < n; ++i) s.step();
+}
+
+double speed(Vec3Lab v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+
+// Acceleration down the board, from the velocity change between t = 0.1 s and 0.4 s.
+struct Descent {
+  double acceleration;  // m/s^2 down the board
+  double omega_r_over_v;
+};
+Descent measure_descent(const CompiledScenario& sc) {
+  Session3D s(sc);
+  const double r = s.radius(0);
+  s.place(0, {0, 0.45, r});
+  run_for(s, 0.1);
+  const double v1 = -s.velocity(0).y;
+  run_for(s, 0.3);
+  const double v2 = -s.velocity(0).y;
+  return {(v2 - v1) / 0.3, speed(s.angular_velocity(0)) * r / speed(s.velocity(0))};
+}
+
+TEST(Sim3D, SphereRollsWithoutSlipping) {
+  const CompiledScenario sc = one_sphere({"particles.friction_base=0.24"});
+  const Descent d = measure_descent(sc);
+  const double expected = 5.0 / 7.0 * kStandardGravity * std::sin(sc.incline);
+  EXPECT_NEAR(d.acceleration, expected, 0.02 * expected);
+  EXPECT_NEAR(d.omega_r_over_v, 1.0, 0.02);
+}
+
+TEST(Sim3D, FrictionlessSphereSlides) {
+  const CompiledScenario sc = one_sphere({"particles.friction_base=0.0"});
+  const Descent d = measure_descent(sc);
+  const double expected = kStandardGravity * std::sin(sc.incline);
+  EXPECT_NEAR(d.acceleration, expected, 0.02 * expected);
+  EXPECT_LT(d.omega_r_over_v, 0.02);  // no torque, no spin
+}
+
+// Rolling resistance c decelerates a rolling sphere on a flat board at (5/7) c g
+// (torque c r N about the contact, rolling inertia 7/5 m r^2).
+TEST(Sim3D, RollingResistanceDeceleratesAtFiveSeventhsCG) {
+  const double c = 0.02;
+  const CompiledScenario sc = one_sphere(
+      {"particles.friction_base=0.5", "particles.rolling_resistance=0.02", "plane.incline_deg=0.0"});
+  Session3D s(sc);
+  const double r = s.radius(0);
+  s.place(0, {0, 0.3, r}, {0, 0.5, 0});
+  run_for(s, 0.1);  // sliding turns into rolling within a few ms
+  const double v1 = s.velocity(0).y;
+  run_for(s, 0.5);
+  const double v2 = s.velocity(0).y;
+  const double expected = 5.0 / 7.0 * c * kStandardGravity;
+  EXPECT_NEAR((v1 - v2) / 0.5, expected, 0.03 * expected);
+}
+
+// Two touching spheres against the top wall, on the board: one contact of each kind.
+struct PairCase {
+  std::vector<std::string> materials;  // overrides
+  double mu_pp, mu_pw, mu_pb, e, c, spin_mm;
+};
+
+void check_pair_materials(const PairCase& k) {
+  std::vector<std::string> overrides = k.materials;
+  overrides.insert(overrides.end(), {"particles.count=2", "plane.incline_deg=0.0"});
+  const CompiledScenario sc = one_sphere(overrides);
+  Session3D s(sc);
+  const double r = s.radius(0), y = sc.plane_length - r - 1e-5;
+  s.place(0, {-r, y, r});
+  s.place(1, {r, y, r});
+  s.step();
+  int seen[3] = {0, 0, 0};
+  for (const ContactInfo3D& ct : s.contacts()) {
+    ASSERT_EQ(ct.a, Surface3D::particle);
+    double mu = 0, rolling_radius = r;
+    switch (ct.b) {
+      case Surface3D::particle: mu = k.mu_pp, rolling_radius = r / 2; break;  // reduced radius r1 r2 / (r1 + r2)
+      case Surface3D::wall: mu = k.mu_pw; break;
+      case Surface3D::board: mu = k.mu_pb; break;
+    }
+    ++seen[static_cast<int>(ct.b)];
+    SCOPED_TRACE(static_cast<int>(ct.b));
+    EXPECT_NEAR(ct.material.friction, mu, 1e-6);
+    EXPECT_NEAR(ct.material.restitution, k.e, 1e-6);
+    EXPECT_NEAR(ct.material.rolling_friction, k.c * rolling_radius, 1e-9);
+    EXPECT_NEAR(ct.material.spinning_friction, k.spin_mm * 1e-3, 1e-9);
+    // The session's own table says the same.
+    const PairMaterial3D table = s.pair_material(ct.b, ct.particle_a, ct.particle_b);
+    EXPECT_NEAR(table.friction, ct.material.friction, 1e-6);
+    EXPECT_NEAR(table.rolling_friction, ct.material.rolling_friction, 1e-9);
+  }
+  EXPECT_EQ(seen[static_cast<int>(Surface3D::particle)], 1);
+  EXPECT_EQ(seen[static_cast<int>(Surface3D::wall)], 2);
+  EXPECT_EQ(seen[static_cast<int>(Surface3D::board)], 2);
+}
+
+TEST(Sim3D, PairMaterialsAreTheScenarios) {
+  check_pair_materials({{"particles.friction_particle=0.3", "particles.friction_wall=0.5",
+                         "particles.friction_base=0.2", "particles.restitution=0.4",
+                         "particles.rolling_resistance=0.01", "particles.spinning_friction_mm=0.1"},
+                        0.3, 0.5, 0.2, 0.4, 0.01, 0.1});
+}
+
+// Frictionless spheres with rough walls: impossible with Bullet's product rule.
+TEST(Sim3D, PairMaterialsWithFrictionlessParticles) {
+  check_pair_materials({{"particles.friction_particle=0.0", "particles.friction_wall=0.6",
+                         "particles.friction_base=0.24", "particles.restitution=0.0",
+                         "particles.rolling_resistance=0.0", "particles.spinning_friction_mm=0.0"},
+                        0.0, 0.6, 0.24, 0.0, 0.0, 0.0});
+}
+
+// A flat-bottomed silo (walls at 90 deg): the sphere rests in the corner between
+// the bottleneck wall and the board, pushed into it by the in-plane gravity.
+TEST(Sim3D, SphereInWallCornerStaysPut) {
+  const CompiledScenario sc = one_sphere({"bottleneck.wall_angle_deg=90.0", "bottleneck.gap_mm=100.0"});
+  Session3D s(sc);
+  const double r = s.radius(0);
+  s.place(0, {0.1, r, r});
+  run_for(s, 0.1);  // contacts form
+  const Vec3Lab p0 = s.position(0);
+  run_for(s, 2.0);
+  const Vec3Lab p1 = s.position(0);
+  const double drift = std::hypot(p1.x - p0.x, p1.y - p0.y, p1.z - p0.z);
+  EXPECT_LT(drift, 0.05 * sc.nominal_diameter);
+  EXPECT_NEAR(p1.y, r, 0.02 * r);  // and it sits on the wall face, not in it
+  EXPECT_NEAR(p1.z, r, 0.02 * r);
+}
+
+// Dropped from one diameter onto a level board, the rebound is at most e^2 h.
+double rebound_height(double e) {
+  const CompiledScenario sc = one_sphere({"particles.restitution=" + std::to_string(e), "plane.incline_deg=0.0"});
+  Session3D s(sc);
+  const double r = s.radius(0), h = sc.nominal_diameter;
+  s.place(0, {0, 0.3, r + h});
+  bool hit = false;
+  double highest = 0;
+  for (int i = 0; i < 400; ++i) {
+    s.step();
+    const Vec3Lab v = s.velocity(0);
+    if (!hit && v.z > 0) hit = true;  // first rebound
+    if (hit) highest = std::max(highest, s.position(0).z - r);
+  }
+  EXPECT_TRUE(hit);
+  return highest / h;
+}
+
+TEST(Sim3D, DropReboundsAtMostESquared) {
+  for (double e : {0.1, 0.5}) {
+    SCOPED_TRACE(e);
+    const double rebound = rebound_height(e);
+    EXPECT_LE(rebound, e * e + 0.01);
+    if (e >= 0.5) {
+      EXPECT_GE(rebound, 0.5 * e * e);  // and it does bounce
+    }
+  }
+}
+
+// A small funnel: W = 4 d, 150 spheres.
+std::string small_discharge_toml(int count, double time_limit_s) {
+  return "[scenario]\nname = \"sim3d small discharge\"\n"
+         "[plane]\nlength_mm = 300.0\nwidth_mm = 120.0\n"
+         "[bottleneck]\ngap_mm = 31.0\n"
+         "[particles]\ncount = " + std::to_string(count) + "\n"
+         "[release]\nsettle_s = 0.2\n"
+         "[run]\ntime_limit_s = " + std::to_string(time_limit_s) + "\nstop_after_no_flow_s = 3.0\n";
+}
+
+TEST(Sim3D, RunsAreDeterministic) {
+  const CompiledScenario sc = compile_text(small_discharge_toml(40, 1.5));
+  auto run = [&] {
+    Session3D s(sc);
+    return run_simulation(sc, s);
+  };
+  const RunRecord a = run(), b = run();
+  ASSERT_GT(a.crossings.size(), 5u);
+  ASSERT_EQ(a.crossings.size(), b.crossings.size());
+  for (size_t i = 0; i < a.crossings.size(); ++i) {
+    EXPECT_EQ(a.crossings[i].id, b.crossings[i].id);
+    EXPECT_EQ(a.crossings[i].t, b.crossings[i].t);
+    EXPECT_EQ(a.crossings[i].x, b.crossings[i].x);
+  }
+}
+
+TEST(Sim3D, SmallDischargeConservesParticles) {
+  const CompiledScenario sc = compile_text(small_discharge_toml(150, 20.0));
+  auto session = make_session_3d(sc);
+  const RunRecord r = run_simulation(sc, *session);
+  EXPECT_EQ(r.model, "3d");
+  EXPECT_EQ(r.escaped, 0);
+  EXPECT_EQ(r.max_conservation_error, 0);
+  EXPECT_EQ(r.passed, 150);
+  EXPECT_EQ(r.end_reason, EndReason::all_passed);
+}
+
+// Shaken walls are exactly at the commanded offset after each step, and the
+// release barrier comes and goes.
+TEST(Sim3D, KinematicWallsReachTheirTargetsAndBarrierToggles) {
+  const CompiledScenario sc = one_sphere();
+  Session3D s(sc);
+  const int bodies = s.body_count();
+  s.set_barrier(true);
+  EXPECT_EQ(s.body_count(), bodies + 1);
+  s.set_barrier(false);
+  EXPECT_EQ(s.body_count(), bodies);
+  ShakeOffsets o;
+  o.left_wall = {-0.0004, 0.0001};
+  o.right_wall = {0.0003, -0.0002};
+  s.set_shake_targets(o);
+  s.step();
+  EXPECT_NEAR(s.bottleneck_offset(false).x, -0.0004, 1e-7);
+  EXPECT_NEAR(s.bottleneck_offset(false).y, 0.0001, 1e-7);
+  EXPECT_NEAR(s.bottleneck_offset(true).x, 0.0003, 1e-7);
+  EXPECT_NEAR(s.bottleneck_offset(true).y, -0.0002, 1e-7);
+  s.retire({0});
+  EXPECT_EQ(s.body_count(), bodies - 1);
+  std::vector<ActiveParticle> active;
+  s.active_particles(active);
+  EXPECT_TRUE(active.empty());
+}
+
+}  // namespace
+}  // namespace gapflow

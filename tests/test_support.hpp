@@ -1,0 +1,22 @@
+// Helpers shared by the tests: scenario loading from text or from scenarios/.
+#pragma once
+
+#include "app/models.hpp"
+#include "common/geometry.hpp"
+#include "common/scenario_loader.hpp"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace gapflow::testing {
+
+// Path of a file in the source tree, e.g. source_path("scenarios/paper/no_obstruction_medium.toml").
+std::filesystem::path source_path(const std::string& relative);
+
+// Parse and compile a scenario given as TOML text (throws on error).
+CompiledScenario compile_text(const std::string& toml, const std::vector<std::string>& overrides = {});
+// Load and compile a shipped scenario file.
+CompiledScenario compile_file(const std::string& relative, const std::vector<std::string>& overrides = {});
+
+}  // namespace gapflow::testing
