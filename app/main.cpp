@@ -5,13 +5,18 @@
 #include "app/models.hpp"
 #include "common/geometry.hpp"
 #include "common/scenario_loader.hpp"
+#include "common/statistics.hpp"
+#include "common/units.hpp"
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <cstdio>
+#include <mutex>
 #include <filesystem>
 #include <fmt/format.h>
 #include <fstream>
 #include <iostream>
+#include <thread>
 
 namespace {
 
@@ -57,9 +62,73 @@ void write_file_atomically(const std::string& path, const std::function<void(std
   std::filesystem::rename(tmp, path);
 }
 
-int cmd_run(const ScenarioArgs& a, const std::string& model_name, const std::string& out_path, bool quiet) {
+// Replicates r0 .. r0+n-1 of one scenario, on `jobs` worker threads. Each run is
+// single-threaded and seeded by its replicate, so the records do not depend on jobs.
+std::vector<RunRecord> run_replicates(const ScenarioArgs& a, ModelKind kind, int n, int jobs) {
+  std::vector<CompiledScenario> scenarios;
+  const int r0 = load_and_compile(a).def.run.replicate;
+  for (int i = 0; i < n; ++i) {
+    ScenarioArgs ai = a;
+    ai.overrides.push_back("run.replicate=" + std::to_string(r0 + i));
+    scenarios.push_back(load_and_compile(ai));
+  }
+  std::vector<RunRecord> records(static_cast<size_t>(n));
+  std::atomic<int> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  auto worker = [&] {
+    for (int i; (i = next++) < n;) {
+      try {
+        records[static_cast<size_t>(i)] = run_model(scenarios[static_cast<size_t>(i)], kind);
+      } catch (...) {
+        std::lock_guard lock(failure_mutex);
+        failure = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int j = 0; j < std::max(1, std::min(jobs, n)); ++j) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  return records;
+}
+
+void print_replicate_table(const std::vector<RunRecord>& records) {
+  auto opt = [](const std::optional<double>& v) { return v ? fmt::format("{:9.2f}", *v) : std::string("      n/a"); };
+  std::cout << "replicate  passed  escaped  J_paper/s  J_flow/s   J_mid/s  clogs  regime        sim_s  wall_s\n";
+  std::vector<double> jp, jf, jm;
+  for (const RunRecord& r : records) {
+    std::cout << fmt::format("{:9d}  {:6d}  {:7d}  {}  {} {}  {:5d}  {:12s} {:6.1f}  {:6.1f}\n", r.replicate, r.passed,
+                             r.escaped, opt(r.j_paper), opt(r.j_flowing), opt(r.j_mid), r.clogs.size(),
+                             to_string(r.regime), r.sim_time_s, r.wall_time_s);
+    if (r.j_paper) jp.push_back(*r.j_paper);
+    if (r.j_flowing) jf.push_back(*r.j_flowing);
+    if (r.j_mid) jm.push_back(*r.j_mid);
+  }
+  const double d = records.front().diameter_m;
+  auto line = [&](const char* name, const std::vector<double>& v) {
+    const Summary s = summarize(v);
+    std::cout << fmt::format("{:10s} n = {:3d}  mean {:8.3f} /s  95% CI +-{:.3f} ({:.2f} %)  J*sqrt(d/g) = {:.4f}\n",
+                             name, s.n, s.mean, s.ci95_half, s.n ? 100 * s.ci95_half / s.mean : 0.0,
+                             dimensionless_flow_rate(s.mean, d));
+  };
+  line("J_paper", jp);
+  line("J_flowing", jf);
+  line("J_mid", jm);
+}
+
+int cmd_run(const ScenarioArgs& a, const std::string& model_name, const std::string& out_path, bool quiet,
+            int replicates, int jobs) {
   const ModelKind kind = parse_model_kind(model_name);
   const CompiledScenario sc = load_and_compile(a);
+  if (replicates > 1) {
+    if (!out_path.empty()) throw std::invalid_argument("--out writes one run record: use it without --replicates");
+    if (!quiet)
+      std::cerr << fmt::format("running {} replicates of '{}' in {} on {} worker threads...\n", replicates,
+                               sc.def.name, to_string(kind), jobs);
+    print_replicate_table(run_replicates(a, kind, replicates, jobs));
+    return 0;
+  }
   if (!quiet)
     std::cerr << fmt::format("running '{}' in {} with {} particles...\n", sc.def.name, to_string(kind),
                              sc.particles.size());
@@ -98,6 +167,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"2d", "3d"}));
   run->add_option("--out", out_path, "Write the complete run record (crossings, avalanches, clogs) as JSON");
   run->add_flag("--quiet", quiet, "Do not print progress to stderr");
+  int replicates = 1, jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  run->add_option("--replicates", replicates,
+                  "Run this many replicates (run.replicate, +1, ...) and print mean J with 95 % intervals")
+      ->check(CLI::Range(1, 100000));
+  run->add_option("--jobs", jobs, "Worker threads for --replicates (results do not depend on it)")
+      ->check(CLI::Range(1, 1024));
 
   ScenarioArgs check_args;
   bool print = false;
@@ -115,7 +190,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (*run) return cmd_run(run_args, model, out_path, quiet);
+    if (*run) return cmd_run(run_args, model, out_path, quiet, replicates, jobs);
     if (*check) return cmd_check(check_args, print);
   } catch (const ScenarioError& e) {
     std::cerr << "error: " << e.what() << "\n";

@@ -19,9 +19,10 @@ std::unique_ptr<EngineSession> make_session(const CompiledScenario& scenario, Mo
   return kind == ModelKind::box2d ? make_session_2d(scenario) : make_session_3d(scenario);
 }
 
-RunRecord run_model(const CompiledScenario& scenario, ModelKind kind, const StepObserver* observer) {
+RunRecord run_model(const CompiledScenario& scenario, ModelKind kind, const StepObserver* observer,
+                    const std::atomic<bool>* cancel) {
   auto session = make_session(scenario, kind);
-  return run_simulation(scenario, *session, observer);
+  return run_simulation(scenario, *session, observer, cancel);
 }
 
 }  // namespace gapflow

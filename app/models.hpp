@@ -16,7 +16,7 @@ const char* to_string(ModelKind kind);  // "2d" | "3d"
 std::unique_ptr<EngineSession> make_session(const CompiledScenario& scenario, ModelKind kind);
 
 // Build the session for `kind` and run it.
-RunRecord run_model(const CompiledScenario& scenario, ModelKind kind,
-                    const StepObserver* observer = nullptr);
+RunRecord run_model(const CompiledScenario& scenario, ModelKind kind, const StepObserver* observer = nullptr,
+                    const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace gapflow

@@ -37,6 +37,9 @@ class EngineSession {
   virtual void active_particles(std::vector<ActiveParticle>& out) const = 0;
   // Remove particles from the simulation (passed far below the gap, or escaped).
   virtual void retire(const std::vector<int>& ids) = 0;
+  // Move particles (never retired) to new positions, at rest: clog-breaking and
+  // re-injection protocols (common/protocols.hpp).
+  virtual void reinject(const std::vector<ActiveParticle>& placements) = 0;
 };
 
 

@@ -242,9 +242,7 @@ void pack_particles(CompiledScenario& c) {
     const int half_sites = static_cast<int>(std::ceil(w2 / a)) + 1;
     for (int j = -half_sites; j <= half_sites && static_cast<int>(c.particles.size()) < p.count; ++j) {
       const Vec2 site{j * a + offset, y};
-      if (std::abs(site.x) > w2 - a / 2) continue;
-      if (clearance_to_bottleneck_walls(c, site) < a / 2) continue;
-      if (obstruction_distance(c.obstruction, site) < a / 2) continue;
+      if (!fits_on_board(c, site, a / 2)) continue;
       const int id = static_cast<int>(c.particles.size());
       RandomStream place = particle_stream(c.def.run.seed, c.def.run.replicate, StreamPurpose::placement,
                                            static_cast<std::uint64_t>(id));
@@ -265,6 +263,11 @@ double clearance_to_bottleneck_walls(const CompiledScenario& c, Vec2 p) {
   };
   return std::min(signed_to(c.right_tip, right_top, c.right_wall_normal),
                   signed_to(c.left_tip, left_top, c.left_wall_normal));
+}
+
+bool fits_on_board(const CompiledScenario& c, Vec2 p, double radius) {
+  return std::abs(p.x) <= c.channel_width / 2 - radius && p.y >= radius && p.y <= c.plane_length - radius &&
+         clearance_to_bottleneck_walls(c, p) >= radius && obstruction_distance(c.obstruction, p) >= radius;
 }
 
 double obstruction_wall_clearance(const CompiledScenario& c) {

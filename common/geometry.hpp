@@ -89,6 +89,9 @@ CompiledScenario compile_scenario(const ScenarioDef& def);
 
 // Distance (m) from a point to the inner face of the nearest bottleneck wall (positive inside the funnel).
 double clearance_to_bottleneck_walls(const CompiledScenario& c, Vec2 p);
+// Whether a disc of `radius` (m) centred at p lies on the open board: inside the
+// retaining and bottleneck walls, clear of the obstruction, below the top wall, above the gap line.
+bool fits_on_board(const CompiledScenario& c, Vec2 p, double radius);
 // Smallest clearance (m) between the obstruction and the bottleneck/retaining walls (negative = overlap).
 double obstruction_wall_clearance(const CompiledScenario& c);
 

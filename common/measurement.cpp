@@ -45,6 +45,7 @@ ParticleFate GapMonitor::observe(int id, Vec2 p, double t) {
     if (std::abs(xc) <= sc_.gap / 2 + gap_tolerance_) {
       s.passed = true;
       ++passed_;
+      ++away_;
       crossings_.push_back({id, tc, xc});
       last_crossing_t_ = std::max(last_crossing_t_, tc);
       s.last = p;
@@ -63,9 +64,20 @@ ParticleFate GapMonitor::observe(int id, Vec2 p, double t) {
   return ParticleFate::inside;
 }
 
+void GapMonitor::reinject(int id, Vec2 position) {
+  State& s = state_[static_cast<size_t>(id)];
+  if (s.passed) {
+    s.passed = false;
+    --away_;
+    ++inside_;  // inside again as of now; the next end_step() recounts
+    ++reinjected_;
+  }
+  s.last = position;
+}
+
 void GapMonitor::end_step(double t) {
   inside_ = inside_this_step_;
-  const int error = std::abs(inside_ + passed_ + escaped_ - particles());
+  const int error = std::abs(inside_ + away_ + escaped_ - particles());
   max_conservation_error_ = std::max(max_conservation_error_, error);
   inside_this_step_ = 0;
   t_prev_ = t;
@@ -103,6 +115,7 @@ void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s,
 void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
   r.particles = particles();
   r.passed = passed_;
+  r.reinjected = reinjected_;
   r.escaped = escaped_;
   r.max_conservation_error = max_conservation_error_;
   r.sim_time_s = t_end;
@@ -116,14 +129,17 @@ void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
   r.j_paper.reset();
   r.j_flowing.reset();
   r.j_mid.reset();
-  if (n > 0 && passed_ == particles()) r.j_paper = n / r.crossings.back().t;
-  if (n >= 2) {
-    double clogged = 0;  // complete clogs between the first and the last crossing
-    for (const Clog& c : r.clogs)
-      if (!c.censored && c.t_start >= r.crossings.front().t) clogged += c.duration;
-    const double flowing = r.crossings.back().t - r.crossings.front().t - clogged;
-    if (flowing > 0) r.j_flowing = (n - 1) / flowing;
+  // The paper's J needs a board that emptied completely, once.
+  if (n > 0 && passed_ == particles() && reinjected_ == 0) r.j_paper = n / r.crossings.back().t;
+  // Rate while flowing: the crossing intervals inside avalanches only. A clog's
+  // duration runs from crossing to crossing, so it must not also remove an interval.
+  int intervals = 0;
+  double flowing = 0;
+  for (const Avalanche& a : r.avalanches) {
+    intervals += a.size - 1;
+    flowing += a.t_end - a.t_start;
   }
+  if (intervals > 0 && flowing > 0) r.j_flowing = intervals / flowing;
   if (n >= 10) {
     const int i10 = static_cast<int>(std::floor(0.1 * (n - 1)));
     const int i90 = static_cast<int>(std::ceil(0.9 * (n - 1)));
@@ -137,7 +153,7 @@ void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
 }
 
 StopDecision should_stop(const RunDef& run, const GapMonitor& m, double t) {
-  if (m.passed() + m.escaped() >= m.particles()) return {true, EndReason::all_passed};
+  if (m.away() + m.escaped() >= m.particles()) return {true, EndReason::all_passed};
   if (run.end == EndCondition::n_passed && m.passed() >= run.n_passed) return {true, EndReason::n_passed};
   if (t >= run.time_limit_s - 1e-12) return {true, EndReason::time_limit};
   if (run.stop_after_no_flow_s > 0 && t - m.last_crossing_time() >= run.stop_after_no_flow_s)

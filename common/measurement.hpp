@@ -26,7 +26,18 @@ class GapMonitor {
   // Called once per step after all observe() calls.
   void end_step(double t);
 
-  int passed() const { return passed_; }
+  // A particle was moved by a protocol (common/protocols.hpp) to `position`: a
+  // passed particle becomes inside again (it may cross again); an inside one
+  // just jumps (no crossing is inferred from the jump).
+  void reinject(int id, Vec2 position);
+  bool is_inside(int id) const {
+    const State& s = state_[static_cast<size_t>(id)];
+    return !s.passed && !s.escaped;
+  }
+
+  int passed() const { return passed_; }   // crossings so far (a re-injected particle can cross again)
+  int away() const { return away_; }       // passed and not (yet) re-injected
+  int reinjected() const { return reinjected_; }
   int escaped() const { return escaped_; }
   int inside() const { return inside_; }  // as of the last end_step()
   int particles() const { return static_cast<int>(state_.size()); }
@@ -47,6 +58,8 @@ class GapMonitor {
   std::vector<State> state_;
   std::vector<Crossing> crossings_;
   int passed_ = 0;
+  int away_ = 0;
+  int reinjected_ = 0;
   int escaped_ = 0;
   int inside_ = 0;             // observed this step, neither passed nor escaped
   int inside_this_step_ = 0;

@@ -89,6 +89,8 @@ void write_json(std::ostream& out, const RunRecord& r) {
       {"d_over_d", r.distance_m / r.diameter_m},
       {"particles", r.particles},
       {"passed", r.passed},
+      {"reinjected", r.reinjected},
+      {"perturbations", r.perturbations},
       {"escaped", r.escaped},
       {"max_conservation_error", r.max_conservation_error},
       {"sim_time_s", r.sim_time_s},

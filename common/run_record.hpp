@@ -56,7 +56,9 @@ struct RunRecord {
 
   // Counts.
   int particles = 0;                 // N
-  int passed = 0;                    // crossed the gap line
+  int passed = 0;                    // crossings of the gap line (> N possible with re-injection)
+  int reinjected = 0;                // passed particles put back on the pile (protocol.reinject_passed)
+  int perturbations = 0;             // clog-breaking interventions (protocol.clog_breaking)
   int escaped = 0;                   // left the domain anywhere but the gap (tunnelling); must be 0
   int max_conservation_error = 0;    // max over steps of |passed + inside + escaped - N|; must be 0
 

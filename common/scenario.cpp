@@ -48,6 +48,15 @@ const char* to_string(EndCondition v) {
   return "?";
 }
 
+const char* to_string(ClogBreaking v) {
+  switch (v) {
+    case ClogBreaking::shaking: return "shaking";
+    case ClogBreaking::local_perturbation: return "local_perturbation";
+    case ClogBreaking::refill: return "refill";
+  }
+  return "?";
+}
+
 const char* to_string(BaseFrictionMethod v) {
   switch (v) {
     case BaseFrictionMethod::force: return "force";

@@ -93,6 +93,18 @@ struct ShakingDef {
   ShakeDef obstruction;  // the obstruction
 };
 
+// [protocol] What is done about clogs and passed particles (besides the shaking schedules).
+enum class ClogBreaking {
+  shaking,             // nothing more: only the [shaking.*] schedules (the paper's protocol)
+  local_perturbation,  // after clog_timeout_s without a crossing: lift the particles that see the gap onto the pile
+  refill               // after clog_timeout_s without a crossing: put every particle back into the initial packing
+};
+struct ProtocolDef {
+  ClogBreaking clog_breaking = ClogBreaking::shaking;
+  bool reinject_passed = false;    // passed particles are put back on top of the pile (steady state; ends by time or n_passed)
+  double perturb_radius_d = 3.0;   // local_perturbation: candidates within W/2 + this many d of the gap centre
+};
+
 enum class EndCondition { all_passed, time_limit, n_passed };
 
 // [run]
@@ -117,7 +129,7 @@ struct Box2DBaseFrictionDef {
   BaseFrictionMethod method = BaseFrictionMethod::force;
 };
 struct Box2DDef {
-  double time_step_s = 0.002;       // s (lab), chosen by the convergence study (README)
+  double time_step_s = 0.001;       // s (lab), chosen by the convergence study (README, results/timestep_2d)
   int velocity_iterations = 8;
   int position_iterations = 3;
   bool sleeping = false;            // engine sleeping freezes slow particles and fakes clogs
@@ -151,6 +163,7 @@ struct ScenarioDef {
   ReleaseDef release;
   ObstructionDef obstruction;
   ShakingDef shaking;
+  ProtocolDef protocol;
   RunDef run;
   ModelDef model;
 };
@@ -160,6 +173,7 @@ const char* to_string(ObstructionShape v);
 const char* to_string(DistanceReference v);
 const char* to_string(Apex v);
 const char* to_string(EndCondition v);
+const char* to_string(ClogBreaking v);
 const char* to_string(BaseFrictionMethod v);
 
 }  // namespace gapflow

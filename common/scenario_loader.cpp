@@ -506,6 +506,16 @@ void read_run(Section s, RunDef& r, int particle_count) {
                  "clog_timeout_s");
 }
 
+void read_protocol(Section s, ProtocolDef& p) {
+  if (auto c = s.choice<ClogBreaking>("clog_breaking", {{"shaking", ClogBreaking::shaking},
+                                                        {"local_perturbation", ClogBreaking::local_perturbation},
+                                                        {"refill", ClogBreaking::refill}}))
+    p.clog_breaking = *c;
+  s.boolean("reinject_passed", p.reinject_passed);
+  s.number("perturb_radius_d", p.perturb_radius_d, closed(0.5, 50));
+  s.finish();
+}
+
 void read_box2d(Section s, Box2DDef& b) {
   s.number("time_step_s", b.time_step_s, lower_open(0, 0.1, "s"));
   s.integer("velocity_iterations", b.velocity_iterations, 1, 1000);
@@ -552,7 +562,8 @@ ScenarioDef read_document(Reader& r, const toml::table& doc) {
   Section scenario = root.section("scenario"), plane = root.section("plane"),
           bottleneck = root.section("bottleneck"), particles = root.section("particles"),
           release = root.section("release"), obstruction = root.section("obstruction"),
-          shaking = root.section("shaking"), run = root.section("run"), model = root.section("model");
+          shaking = root.section("shaking"), protocol = root.section("protocol"), run = root.section("run"),
+          model = root.section("model");
   root.finish();
 
   ScenarioDef d;
@@ -563,8 +574,12 @@ ScenarioDef read_document(Reader& r, const toml::table& doc) {
   read_release(release, d.release);
   read_obstruction(obstruction, d.obstruction);
   read_shaking(shaking, d.shaking);
+  read_protocol(protocol, d.protocol);
   read_run(run, d.run, d.particles.count);
   read_model(model, d.model);
+  if (d.protocol.reinject_passed && d.run.end == EndCondition::all_passed)
+    run.fail_value("end", "\"all_passed\"",
+                   "with protocol.reinject_passed = true the board never empties: use \"time_limit\" or \"n_passed\"");
   return d;
 }
 
@@ -741,6 +756,13 @@ void write_obstruction(TomlWriter& w, const ObstructionDef& o) {
   w.put("lateral_offset_mm", o.lateral_offset_mm);
 }
 
+void write_protocol(TomlWriter& w, const ProtocolDef& p) {
+  w.section("protocol");
+  w.put("clog_breaking", to_string(p.clog_breaking));
+  w.put("reinject_passed", p.reinject_passed);
+  w.put("perturb_radius_d", p.perturb_radius_d);
+}
+
 void write_run(TomlWriter& w, const RunDef& r) {
   w.section("run");
   w.put("end", to_string(r.end));
@@ -810,6 +832,7 @@ std::string canonical_toml(const ScenarioDef& def) {
   write_obstruction(w, def.obstruction);
   write_shake(w, "shaking.walls", def.shaking.walls);
   write_shake(w, "shaking.obstruction", def.shaking.obstruction);
+  write_protocol(w, def.protocol);
   write_run(w, def.run);
   write_model(w, def.model);
   return std::move(w).str();

@@ -3,6 +3,8 @@
 //   loop { move shakers -> step physics -> measure -> retire -> stop? } -> record.
 #include "common/simulation.hpp"
 
+#include "common/protocols.hpp"
+
 #include <chrono>
 #include <cmath>
 
@@ -35,17 +37,20 @@ void fill_identity(const CompiledScenario& sc, const EngineSession& session, Run
 
 }  // namespace
 
-RunRecord run_simulation(const CompiledScenario& sc, EngineSession& session, const StepObserver* observer) {
+RunRecord run_simulation(const CompiledScenario& sc, EngineSession& session, const StepObserver* observer,
+                         const std::atomic<bool>* cancel) {
   const auto wall_start = std::chrono::steady_clock::now();
   settle(sc, session);
 
   GapMonitor monitor(sc);
+  ClogProtocol protocol(sc);
   const double dt = session.time_step();
   std::vector<ActiveParticle> active;
-  std::vector<int> retiring;
+  std::vector<int> retiring, passed_below;
   double t = 0;
   EndReason reason = EndReason::time_limit;
   for (long step = 1;; ++step) {
+    if (cancel && cancel->load(std::memory_order_relaxed)) throw RunCancelled();
     const double t_next = step * dt;  // no accumulated round-off
     session.set_shake_targets(shake_offsets(sc.def.shaking, t_next));
     session.step();
@@ -53,12 +58,16 @@ RunRecord run_simulation(const CompiledScenario& sc, EngineSession& session, con
 
     session.active_particles(active);
     retiring.clear();
+    passed_below.clear();
     for (const ActiveParticle& p : active) {
       const ParticleFate fate = monitor.observe(p.id, p.position, t);
-      if (fate == ParticleFate::passed_retire || fate == ParticleFate::escaped) retiring.push_back(p.id);
+      if (fate == ParticleFate::escaped) retiring.push_back(p.id);
+      if (fate == ParticleFate::passed_retire)
+        (protocol.reinjects_passed() ? passed_below : retiring).push_back(p.id);
     }
     monitor.end_step(t);
     if (!retiring.empty()) session.retire(retiring);
+    protocol.apply(t, session, monitor, active, passed_below);
     if (observer && observer->after_step) observer->after_step(t, session, monitor);
 
     const StopDecision stop = should_stop(sc.def.run, monitor, t);
@@ -71,6 +80,7 @@ RunRecord run_simulation(const CompiledScenario& sc, EngineSession& session, con
   RunRecord record;
   fill_identity(sc, session, record);
   monitor.finish(t, reason, record);
+  record.perturbations = protocol.perturbations();
   record.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return record;
 }

@@ -7,6 +7,8 @@
 #include "sim2d/model2d.hpp"
 #include "sim2d/world2d.hpp"
 
+#include <stdexcept>
+
 namespace gapflow {
 
 class Session2D final : public EngineSession {
@@ -46,6 +48,16 @@ class Session2D final : public EngineSession {
     out.clear();
     out.reserve(w_->active.size());
     for (int i : w_->active) out.push_back({i, w_->to_lab(w_->particles[static_cast<size_t>(i)]->GetPosition())});
+  }
+
+  void reinject(const std::vector<ActiveParticle>& placements) override {
+    for (const ActiveParticle& p : placements) {
+      b2Body* b = w_->particles.at(static_cast<size_t>(p.id));
+      if (!b) throw std::logic_error("reinject: particle was retired");
+      b->SetTransform(w_->to_engine(p.position), 0.0f);
+      b->SetLinearVelocity(b2Vec2_zero);
+      b->SetAngularVelocity(0.0f);
+    }
   }
 
   World2D& world() { return *w_; }

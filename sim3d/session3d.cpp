@@ -2,7 +2,7 @@
 //
 // Sections: materials (pair look-up installed into Bullet's combiner hooks),
 // shapes (prisms extruded from the plane-frame polygons), bodies, the session's
-// stages (build, step, report, retire) and the test extras.
+// stages (build, step, report, retire, reinject) and the test extras.
 #include "sim3d/session3d.hpp"
 
 #include "sim3d/model3d.hpp"
@@ -38,7 +38,7 @@ constexpr double kNominalMass = 1e-3;
 struct MaterialTable {
   double friction[3][3] = {};   // Coulomb, [kind a][kind b]
   double restitution = 0;       // every pair
-  double rolling_resistance = 0;// dimensionless; rolling friction = this * effective radius
+  double rolling_resistance = 0;// dimensionless, board only; rolling friction = this * sphere radius
   double spinning = 0;          // engine length, every pair
   // Bullet only builds the spinning constraint when the rolling value is > 0;
   // this keeps it on when spinning friction is set but rolling resistance is 0.
@@ -53,12 +53,13 @@ double sphere_radius(const btCollisionObject* o) {
   return static_cast<const btSphereShape*>(s)->getRadius();
 }
 
-// Radius of the rolling contact: the sphere's against a wall or the board; the
-// reduced radius r1 r2 / (r1 + r2) between two spheres (usual DEM convention).
-double rolling_radius(Surface3D ka, double ra, Surface3D kb, double rb) {
-  const bool pa = ka == Surface3D::particle, pb = kb == Surface3D::particle;
-  if (pa && pb) return ra * rb / (ra + rb);
-  return pa ? ra : (pb ? rb : 0.0);
+// Radius of the sphere rolling on the board, 0 for any other pair: the
+// scenario's rolling_resistance is resistance from the board (as in the 2D
+// model), and skipping it elsewhere saves Bullet three solver rows per contact.
+double board_rolling_radius(Surface3D ka, double ra, Surface3D kb, double rb) {
+  if (ka == Surface3D::particle && kb == Surface3D::board) return ra;
+  if (kb == Surface3D::particle && ka == Surface3D::board) return rb;
+  return 0.0;
 }
 
 struct PairEngine {
@@ -69,7 +70,7 @@ PairEngine pair_values(const MaterialTable& t, Surface3D ka, double ra, Surface3
   PairEngine p{};
   p.friction = t.friction[static_cast<int>(ka)][static_cast<int>(kb)];
   p.restitution = t.restitution;
-  p.rolling = t.rolling_resistance * rolling_radius(ka, ra, kb, rb);
+  p.rolling = t.rolling_resistance * board_rolling_radius(ka, ra, kb, rb);
   p.spinning = t.spinning;
   if (p.rolling <= 0 && p.spinning > 0) p.rolling = t.rolling_floor;
   return p;
@@ -520,6 +521,18 @@ void Session3D::retire(const std::vector<int>& ids) {
   }
 }
 
+// Teleport to (x, y) on the board, at rest. The body's old contact caches are
+// dropped so that no warm-start impulse from the old place is applied.
+void Session3D::reinject(const std::vector<ActiveParticle>& placements) {
+  for (const ActiveParticle& p : placements) {
+    btRigidBody& b = particle(*w_, p.id);
+    const double r = w_->scale.to_lab_length(sphere_radius(&b));
+    place(p.id, {p.position.x, p.position.y, r});
+    w_->world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(b.getBroadphaseHandle(),
+                                                                             w_->world.getDispatcher());
+  }
+}
+
 // --- Extras ------------------------------------------------------------------
 
 const EngineScaling& Session3D::scaling() const { return w_->scale; }
@@ -557,6 +570,7 @@ void Session3D::place(int id, Vec3Lab c, Vec3Lab v) {
   b.setAngularVelocity(btVector3(0, 0, 0));
   b.setInterpolationLinearVelocity(b.getLinearVelocity());
   b.setInterpolationAngularVelocity(btVector3(0, 0, 0));
+  b.clearForces();
   b.activate(true);
 }
 

@@ -59,6 +59,7 @@ class Session3D final : public EngineSession {
   void zero_velocities() override;
   void active_particles(std::vector<ActiveParticle>& out) const override;
   void retire(const std::vector<int>& ids) override;
+  void reinject(const std::vector<ActiveParticle>& placements) override;
 
   // --- Extras for tests and diagnostics (lab units, plane frame) ---
   const EngineScaling& scaling() const;

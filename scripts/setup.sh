@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Install what is missing (Debian 12 packages only) and build gapflow (Release) into build/.
+# Safe to run again: it installs nothing that is already there and rebuilds incrementally.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake pkg-config
+  libbox2d-dev libbullet-dev libeigen3-dev
+  libgtest-dev libbenchmark-dev libbenchmark-tools
+  libtomlplusplus-dev libcli11-dev libsqlite3-dev libfmt-dev libtbb-dev
+  python3 python3-matplotlib
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$(nproc)"

@@ -1,0 +1,160 @@
+#include "studies/jobs.hpp"
+
+#include "common/geometry.hpp"
+#include "common/random.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace gapflow {
+
+std::uint64_t model_key_id(ModelKind kind) {
+  // Written out so that reordering ModelKind can never change a job key.
+  switch (kind) {
+    case ModelKind::box2d: return 2;
+    case ModelKind::bullet: return 3;
+  }
+  return 0;
+}
+
+std::string job_key(std::uint64_t scenario_hash, ModelKind kind) {
+  return fmt::format("{:016x}", mix_seed(scenario_hash, model_key_id(kind)));
+}
+
+namespace {
+
+// One point of a series' grid: the value index on each axis.
+struct Point {
+  int index = 0;
+  std::vector<std::size_t> value_of_axis;
+};
+
+std::vector<Point> grid_points(const SeriesDef& s) {
+  std::size_t n = 1;
+  for (const SweepAxis& a : s.axes) n *= a.values.size();
+  std::vector<Point> out;
+  for (std::size_t i = 0; i < n; ++i) {
+    Point p{static_cast<int>(i), std::vector<std::size_t>(s.axes.size())};
+    std::size_t rest = i;
+    for (std::size_t k = s.axes.size(); k-- > 0;) {  // last axis varies fastest
+      p.value_of_axis[k] = rest % s.axes[k].values.size();
+      rest /= s.axes[k].values.size();
+    }
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+// The point's overrides with their study-file locations, its label and its JSON.
+struct PointSpec {
+  std::vector<LocatedOverride> overrides;
+  std::string label;
+  std::string json;
+};
+
+PointSpec point_spec(const StudyDef& study, const SeriesDef& s, const Point& p) {
+  PointSpec spec;
+  spec.overrides = study.set;
+  spec.overrides.insert(spec.overrides.end(), s.set.begin(), s.set.end());
+  std::string json;
+  for (std::size_t k = 0; k < s.axes.size(); ++k) {
+    const AxisValue& v = s.axes[k].values[p.value_of_axis[k]];
+    const std::string assignment = s.axes[k].key + "=" + v.toml;
+    spec.overrides.push_back({assignment, v.where});
+    spec.label += (k ? ", " : "") + assignment;
+    json += fmt::format("{}\"{}\":{}", k ? "," : "", s.axes[k].key, v.json);
+  }
+  spec.json = "{" + json + "}";
+  return spec;
+}
+
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the scenario file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Re-throw a scenario error at the study-file location of the override that
+// caused it (the loader calls override N "--set:N"), naming series and point.
+[[noreturn]] void rethrow_in_study(const ScenarioError& e, const std::vector<LocatedOverride>& overrides,
+                                   const SeriesDef& s, const PointSpec& spec) {
+  SourceLocation at = e.where();
+  if (at.source == "--set" && at.line >= 1 && static_cast<std::size_t>(at.line) <= overrides.size())
+    at = overrides[static_cast<std::size_t>(at.line) - 1].where;
+  const std::string context = spec.label.empty() ? fmt::format("series '{}'", s.label)
+                                                 : fmt::format("series '{}', point {}", s.label, spec.label);
+  throw ScenarioError(at, e.key(), e.value(), fmt::format("{} [{}]", e.allowed(), context));
+}
+
+}  // namespace
+
+CompiledScenario compile_job(const Job& job) {
+  LoadedScenario loaded = load_scenario(job.scenario, job.overrides);
+  try {
+    return compile_scenario(loaded.def);
+  } catch (const ScenarioInvalid& e) {
+    throw locate(e, loaded);
+  }
+}
+
+std::vector<Job> expand_jobs(const StudyDef& study) {
+  std::vector<Job> jobs;
+  std::map<std::string, std::size_t> first_of_key;  // a repeated key would silently merge two jobs
+  const SourceLocation seed_at{study.file.string(), 0, 0};
+  for (const SeriesDef& s : study.series) {
+    const std::string text = read_text(s.scenario);  // once per series, not once per job
+    for (const Point& p : grid_points(s)) {
+      const PointSpec spec = point_spec(study, s, p);
+      for (ModelKind model : study.models) {
+        for (int r = 0; r < study.replicates; ++r) {
+          std::vector<LocatedOverride> overrides = spec.overrides;
+          overrides.push_back({fmt::format("run.seed={}", study.seed), seed_at});
+          overrides.push_back({fmt::format("run.replicate={}", r), seed_at});
+          std::vector<std::string> plain;
+          for (const LocatedOverride& o : overrides) plain.push_back(o.text);
+          Job job;
+          try {
+            LoadedScenario loaded = parse_scenario(text, s.scenario.string(), plain);
+            try {
+              const CompiledScenario sc = compile_scenario(loaded.def);
+              job.id.scenario_hash = sc.scenario_hash;
+              job.id.run_seed = sc.run_seed;
+            } catch (const ScenarioInvalid& e) {
+              throw locate(e, loaded);
+            }
+          } catch (const ScenarioError& e) {
+            rethrow_in_study(e, overrides, s, spec);
+          }
+          job.model = model;
+          job.scenario = s.scenario;
+          job.overrides = std::move(plain);
+          job.id.key = job_key(job.id.scenario_hash, model);
+          job.id.study = study.name;
+          job.id.series = s.label;
+          job.id.point = p.index;
+          job.id.point_label = spec.label;
+          job.id.axes_json = spec.json;
+          job.id.model = to_string(model);
+          job.id.replicate = r;
+          job.id.base_seed = study.seed;
+          if (auto [it, fresh] = first_of_key.emplace(job.id.key, jobs.size()); !fresh) {
+            const JobIdentity& other = jobs[it->second].id;
+            throw ScenarioError(spec.overrides.empty() ? seed_at : spec.overrides.back().where, "series", s.label,
+                                fmt::format("point '{}' resolves to the same scenario as series '{}' point '{}' "
+                                            "(job key {}): remove the duplicate",
+                                            spec.label, other.series, other.point_label, job.id.key));
+          }
+          jobs.push_back(std::move(job));
+        }
+      }
+    }
+  }
+  return jobs;
+}
+
+}  // namespace gapflow

@@ -1,0 +1,345 @@
+#include "studies/store.hpp"
+
+#include <fmt/format.h>
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <ostream>
+#include <stdexcept>
+
+#ifndef GAPFLOW_CODE_VERSION
+#define GAPFLOW_CODE_VERSION "unknown"
+#endif
+
+namespace gapflow {
+
+const char* code_version() { return GAPFLOW_CODE_VERSION; }
+
+namespace {
+
+constexpr int kSchemaVersion = 1;
+
+// Column order of `runs` after the identity columns is the order put() binds.
+constexpr const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS runs (
+  job_key TEXT PRIMARY KEY,
+  study TEXT NOT NULL, series TEXT NOT NULL, point INTEGER NOT NULL, point_label TEXT NOT NULL,
+  axes_json TEXT NOT NULL, model TEXT NOT NULL, replicate INTEGER NOT NULL,
+  base_seed INTEGER NOT NULL, run_seed TEXT NOT NULL, scenario_hash TEXT NOT NULL,
+  scenario_name TEXT NOT NULL, code_version TEXT NOT NULL,
+  particles INTEGER NOT NULL, passed INTEGER NOT NULL, reinjected INTEGER NOT NULL,
+  perturbations INTEGER NOT NULL, escaped INTEGER NOT NULL,
+  max_conservation_error INTEGER NOT NULL,
+  sim_time_s REAL NOT NULL, wall_time_s REAL NOT NULL, end_reason TEXT NOT NULL, regime TEXT NOT NULL,
+  j_paper REAL, j_flowing REAL, j_mid REAL, j_paper_star REAL, j_flowing_star REAL,
+  diameter_m REAL NOT NULL, gap_m REAL NOT NULL, distance_m REAL NOT NULL, w_over_d REAL NOT NULL,
+  d_over_d REAL NOT NULL, incline_rad REAL NOT NULL, time_step_s REAL NOT NULL,
+  n_clogs INTEGER NOT NULL, n_avalanches INTEGER NOT NULL,
+  finished_at TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS crossings (
+  job_key TEXT NOT NULL REFERENCES runs(job_key), id INTEGER NOT NULL, t_s REAL NOT NULL, x_m REAL NOT NULL
+);
+-- A particle may cross more than once (protocol.reinject_passed): rows keep the record's order by rowid.
+CREATE INDEX IF NOT EXISTS crossings_job ON crossings (job_key);
+CREATE TABLE IF NOT EXISTS avalanches (
+  job_key TEXT NOT NULL REFERENCES runs(job_key), idx INTEGER NOT NULL, size INTEGER NOT NULL,
+  t_start_s REAL NOT NULL, t_end_s REAL NOT NULL, "first" INTEGER NOT NULL, censored INTEGER NOT NULL,
+  PRIMARY KEY (job_key, idx)
+);
+CREATE TABLE IF NOT EXISTS clogs (
+  job_key TEXT NOT NULL REFERENCES runs(job_key), idx INTEGER NOT NULL, t_start_s REAL NOT NULL,
+  duration_s REAL NOT NULL, censored INTEGER NOT NULL,
+  PRIMARY KEY (job_key, idx)
+);
+)sql";
+
+[[noreturn]] void fail(sqlite3* db, const std::string& what) {
+  throw std::runtime_error(fmt::format("results store: {}: {}", what, db ? sqlite3_errmsg(db) : "out of memory"));
+}
+
+void exec(sqlite3* db, const char* sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string msg = err ? err : "?";
+    sqlite3_free(err);
+    throw std::runtime_error(fmt::format("results store: {}: {}", sql, msg));
+  }
+}
+
+// A prepared statement; bind() takes 1-based positions like SQLite.
+class Statement {
+ public:
+  Statement(sqlite3* db, const char* sql) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql, -1, &s_, nullptr) != SQLITE_OK) fail(db, sql);
+  }
+  ~Statement() { sqlite3_finalize(s_); }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  Statement& bind(int i, const std::string& v) {
+    return check(sqlite3_bind_text(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
+  }
+  Statement& bind(int i, std::int64_t v) { return check(sqlite3_bind_int64(s_, i, v)); }
+  Statement& bind(int i, int v) { return check(sqlite3_bind_int64(s_, i, v)); }
+  Statement& bind(int i, bool v) { return check(sqlite3_bind_int64(s_, i, v ? 1 : 0)); }
+  Statement& bind(int i, double v) { return check(sqlite3_bind_double(s_, i, v)); }
+  Statement& bind(int i, const std::optional<double>& v) {
+    return v ? bind(i, *v) : check(sqlite3_bind_null(s_, i));
+  }
+
+  // Bind every argument in order to ?1, ?2, ...
+  template <class... A>
+  Statement& bind_all(const A&... a) {
+    int i = 0;
+    (bind(++i, a), ...);  // a comma fold is evaluated left to right
+    return *this;
+  }
+
+  // True while a row is available.
+  bool step() {
+    int rc = sqlite3_step(s_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc != SQLITE_DONE) fail(db_, sqlite3_sql(s_));
+    return false;
+  }
+  void run() {
+    step();
+    reset();
+  }
+  void reset() {
+    sqlite3_reset(s_);
+    sqlite3_clear_bindings(s_);
+  }
+
+  int columns() const { return sqlite3_column_count(s_); }
+  std::string name(int c) const { return sqlite3_column_name(s_, c); }
+  int type(int c) const { return sqlite3_column_type(s_, c); }
+  std::string text(int c) const {
+    auto p = reinterpret_cast<const char*>(sqlite3_column_text(s_, c));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(s_, c))) : std::string();
+  }
+  std::int64_t int64(int c) const { return sqlite3_column_int64(s_, c); }
+  int integer(int c) const { return static_cast<int>(sqlite3_column_int64(s_, c)); }
+  double real(int c) const { return sqlite3_column_double(s_, c); }
+  std::optional<double> optional_real(int c) const {
+    if (type(c) == SQLITE_NULL) return std::nullopt;
+    return real(c);
+  }
+
+ private:
+  Statement& check(int rc) {
+    if (rc != SQLITE_OK) fail(db_, "bind");
+    return *this;
+  }
+  sqlite3* db_;
+  sqlite3_stmt* s_ = nullptr;
+};
+
+std::string hex(std::uint64_t v) { return fmt::format("{:016x}", v); }
+std::uint64_t from_hex(const std::string& s) { return std::stoull(s, nullptr, 16); }
+
+template <class E>
+E parse_enum(const std::string& text, std::initializer_list<E> all) {
+  for (E e : all)
+    if (text == to_string(e)) return e;
+  throw std::runtime_error("results store: unknown value '" + text + "'");
+}
+
+// The transaction of put(): rolled back unless commit() was reached.
+class Transaction {
+ public:
+  explicit Transaction(sqlite3* db) : db_(db) { exec(db_, "BEGIN IMMEDIATE"); }
+  ~Transaction() {
+    if (!done_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  void commit() {
+    exec(db_, "COMMIT");
+    done_ = true;
+  }
+
+ private:
+  sqlite3* db_;
+  bool done_ = false;
+};
+
+void insert_children(sqlite3* db, const std::string& key, const RunRecord& r) {
+  Statement c(db, "INSERT INTO crossings (job_key, id, t_s, x_m) VALUES (?, ?, ?, ?)");
+  for (const Crossing& x : r.crossings) c.bind_all(key, x.id, x.t, x.x).run();
+  Statement a(db, "INSERT INTO avalanches (job_key, idx, size, t_start_s, t_end_s, \"first\", censored) "
+                  "VALUES (?, ?, ?, ?, ?, ?, ?)");
+  for (std::size_t i = 0; i < r.avalanches.size(); ++i) {
+    const Avalanche& v = r.avalanches[i];
+    a.bind_all(key, static_cast<int>(i), v.size, v.t_start, v.t_end, v.first, v.censored).run();
+  }
+  Statement k(db, "INSERT INTO clogs (job_key, idx, t_start_s, duration_s, censored) VALUES (?, ?, ?, ?, ?)");
+  for (std::size_t i = 0; i < r.clogs.size(); ++i) {
+    const Clog& v = r.clogs[i];
+    k.bind_all(key, static_cast<int>(i), v.t_start, v.duration, v.censored).run();
+  }
+}
+
+void load_children(sqlite3* db, const std::string& key, RunRecord& r) {
+  Statement c(db, "SELECT id, t_s, x_m FROM crossings WHERE job_key = ? ORDER BY rowid");
+  c.bind(1, key);
+  while (c.step()) r.crossings.push_back({c.integer(0), c.real(1), c.real(2)});
+  Statement a(db, "SELECT size, t_start_s, t_end_s, \"first\", censored FROM avalanches WHERE job_key = ? ORDER BY idx");
+  a.bind(1, key);
+  while (a.step()) r.avalanches.push_back({a.integer(0), a.real(1), a.real(2), a.integer(3) != 0, a.integer(4) != 0});
+  Statement k(db, "SELECT t_start_s, duration_s, censored FROM clogs WHERE job_key = ? ORDER BY idx");
+  k.bind(1, key);
+  while (k.step()) r.clogs.push_back({k.real(0), k.real(1), k.integer(2) != 0});
+}
+
+// One CSV field (RFC 4180 quoting).
+std::string csv_field(const Statement& s, int c) {
+  switch (s.type(c)) {
+    case SQLITE_NULL: return "";
+    case SQLITE_INTEGER: return std::to_string(s.int64(c));
+    case SQLITE_FLOAT: return fmt::format("{}", s.real(c));  // shortest text that reads back exactly
+    default: break;
+  }
+  std::string v = s.text(c);
+  if (v.find_first_of(",\"\r\n") == std::string::npos) return v;
+  std::string q = "\"";
+  for (char ch : v) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return q + "\"";
+}
+
+}  // namespace
+
+Store::Store(const std::filesystem::path& file) {
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
+  if (sqlite3_open(file.c_str(), &db_) != SQLITE_OK) {
+    std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    throw std::runtime_error(fmt::format("results store: cannot open {}: {}", file.string(), msg));
+  }
+  // Another process (a resumed study, an export, a test polling) may hold the lock briefly.
+  sqlite3_busy_timeout(db_, 10000);
+  exec(db_, "PRAGMA journal_mode = WAL");
+  exec(db_, "PRAGMA synchronous = NORMAL");  // WAL + NORMAL: a committed run survives a killed process
+  exec(db_, "PRAGMA foreign_keys = ON");
+  int version = 0;
+  {
+    Statement v(db_, "PRAGMA user_version");
+    v.step();
+    version = v.integer(0);
+  }
+  if (version != 0 && version != kSchemaVersion)
+    throw std::runtime_error(fmt::format("results store {}: schema version {}, this build reads {}", file.string(),
+                                         version, kSchemaVersion));
+  if (version == 0) {  // new file: created once, so that readers of an existing store never need the write lock
+    Transaction tx(db_);
+    exec(db_, kSchema);
+    exec(db_, fmt::format("PRAGMA user_version = {}", kSchemaVersion).c_str());
+    tx.commit();
+  }
+}
+
+Store::~Store() { sqlite3_close(db_); }
+
+const std::vector<std::string>& Store::tables() {
+  static const std::vector<std::string> names{"runs", "crossings", "avalanches", "clogs"};
+  return names;
+}
+
+std::set<std::string> Store::keys() const {
+  std::lock_guard lock(mutex_);
+  std::set<std::string> out;
+  Statement s(db_, "SELECT job_key FROM runs");
+  while (s.step()) out.insert(s.text(0));
+  return out;
+}
+
+bool Store::has(const std::string& key) const {
+  std::lock_guard lock(mutex_);
+  Statement s(db_, "SELECT 1 FROM runs WHERE job_key = ?");
+  s.bind(1, key);
+  return s.step();
+}
+
+std::size_t Store::count() const {
+  std::lock_guard lock(mutex_);
+  Statement s(db_, "SELECT count(*) FROM runs");
+  s.step();
+  return static_cast<std::size_t>(s.int64(0));
+}
+
+void Store::put(const JobIdentity& id, const RunRecord& r) {
+  std::lock_guard lock(mutex_);
+  Transaction tx(db_);
+  Statement s(db_, R"sql(INSERT INTO runs (
+      job_key, study, series, point, point_label, axes_json, model, replicate, base_seed, run_seed,
+      scenario_hash, scenario_name, code_version, particles, passed, reinjected, perturbations, escaped,
+      max_conservation_error, sim_time_s, wall_time_s, end_reason, regime, j_paper, j_flowing, j_mid, j_paper_star,
+      j_flowing_star,
+      diameter_m, gap_m, distance_m, w_over_d, d_over_d, incline_rad, time_step_s, n_clogs, n_avalanches,
+      finished_at)
+    VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
+            strftime('%Y-%m-%dT%H:%M:%fZ', 'now')))sql");
+  // SQLite integers are signed 64-bit: the seed's bits are kept (a seed >= 2^63 reads back unchanged via the cast).
+  s.bind_all(id.key, id.study, id.series, id.point, id.point_label, id.axes_json, id.model, id.replicate,
+             static_cast<std::int64_t>(id.base_seed), hex(id.run_seed), hex(id.scenario_hash), r.scenario_name,
+             std::string(code_version()), r.particles, r.passed, r.reinjected, r.perturbations, r.escaped, r.max_conservation_error, r.sim_time_s,
+             r.wall_time_s, std::string(to_string(r.end_reason)), std::string(to_string(r.regime)), r.j_paper,
+             r.j_flowing, r.j_mid, r.j_paper_star(), r.j_flowing_star(), r.diameter_m, r.gap_m, r.distance_m,
+             r.gap_m / r.diameter_m, r.distance_m / r.diameter_m, r.incline_rad, r.time_step_s,
+             static_cast<int>(r.clogs.size()), static_cast<int>(r.avalanches.size()));
+  s.run();
+  insert_children(db_, id.key, r);
+  tx.commit();
+}
+
+std::vector<StoredRun> Store::load(const std::optional<std::string>& study) const {
+  std::lock_guard lock(mutex_);
+  Statement s(db_, R"sql(SELECT
+      job_key, study, series, point, point_label, axes_json, model, replicate, base_seed, run_seed,
+      scenario_hash, scenario_name, code_version, particles, passed, reinjected, perturbations, escaped,
+      max_conservation_error, sim_time_s, wall_time_s, end_reason, regime, j_paper, j_flowing, j_mid,
+      diameter_m, gap_m, distance_m, incline_rad, time_step_s, finished_at
+    FROM runs WHERE ?1 IS NULL OR study = ?1 ORDER BY job_key)sql");
+  if (study) s.bind(1, *study);
+  std::vector<StoredRun> out;
+  while (s.step()) {
+    StoredRun run;
+    JobIdentity& id = run.id;
+    RunRecord& r = run.record;
+    int c = 0;
+    id.key = s.text(c++), id.study = s.text(c++), id.series = s.text(c++), id.point = s.integer(c++);
+    id.point_label = s.text(c++), id.axes_json = s.text(c++), id.model = s.text(c++);
+    id.replicate = s.integer(c++), id.base_seed = static_cast<std::uint64_t>(s.int64(c++));
+    id.run_seed = from_hex(s.text(c++)), id.scenario_hash = from_hex(s.text(c++));
+    r.model = id.model, r.replicate = id.replicate, r.base_seed = id.base_seed;
+    r.run_seed = id.run_seed, r.scenario_hash = id.scenario_hash;
+    r.scenario_name = s.text(c++), run.code_version = s.text(c++);
+    r.particles = s.integer(c++), r.passed = s.integer(c++), r.reinjected = s.integer(c++);
+    r.perturbations = s.integer(c++), r.escaped = s.integer(c++);
+    r.max_conservation_error = s.integer(c++), r.sim_time_s = s.real(c++), r.wall_time_s = s.real(c++);
+    r.end_reason = parse_enum(s.text(c++), {EndReason::all_passed, EndReason::n_passed, EndReason::time_limit,
+                                            EndReason::permanent_clog});
+    r.regime = parse_enum(s.text(c++), {Regime::continuous, Regime::intermittent, Regime::clogged});
+    r.j_paper = s.optional_real(c++), r.j_flowing = s.optional_real(c++), r.j_mid = s.optional_real(c++);
+    r.diameter_m = s.real(c++), r.gap_m = s.real(c++), r.distance_m = s.real(c++);
+    r.incline_rad = s.real(c++), r.time_step_s = s.real(c++), run.finished_at = s.text(c++);
+    out.push_back(std::move(run));
+  }
+  for (StoredRun& run : out) load_children(db_, run.id.key, run.record);
+  return out;
+}
+
+void Store::export_csv(const std::string& table, std::ostream& out) const {
+  const auto& names = tables();
+  if (std::find(names.begin(), names.end(), table) == names.end())
+    throw std::invalid_argument(fmt::format("table '{}' is not one of: runs, crossings, avalanches, clogs", table));
+  std::lock_guard lock(mutex_);
+  Statement s(db_, fmt::format("SELECT * FROM {} ORDER BY rowid", table).c_str());
+  for (int c = 0; c < s.columns(); ++c) out << (c ? "," : "") << s.name(c);
+  out << "\n";
+  while (s.step()) {
+    for (int c = 0; c < s.columns(); ++c) out << (c ? "," : "") << csv_field(s, c);
+    out << "\n";
+  }
+}
+
+}  // namespace gapflow

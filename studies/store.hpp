@@ -1,0 +1,66 @@
+// The results store of a study: one SQLite file (WAL mode).
+//
+//   runs        one row per finished job (identity + every scalar of RunRecord)
+//   crossings   (job_key, id, t_s, x_m)                       per crossing
+//   avalanches  (job_key, idx, size, t_start_s, t_end_s, first, censored)
+//   clogs       (job_key, idx, t_start_s, duration_s, censored)
+//
+// A run and its child rows are written in one transaction: after a crash or
+// kill -9 a job is either completely stored or absent, so resuming = running
+// the jobs whose key is not in `runs`. Safe to call from several threads (one
+// connection behind a mutex; writes are tiny next to a simulation).
+#pragma once
+
+#include "common/run_record.hpp"
+#include "studies/jobs.hpp"
+
+#include <filesystem>
+#include <iosfwd>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+struct sqlite3;
+
+namespace gapflow {
+
+struct StoredRun {
+  JobIdentity id;
+  RunRecord record;  // rebuilt completely, child rows included
+  std::string code_version;
+  std::string finished_at;  // UTC, ISO 8601
+};
+
+// What this build writes into runs.code_version (git describe at configure time).
+const char* code_version();
+
+class Store {
+ public:
+  // Open or create (with its folder); the schema is created when missing.
+  explicit Store(const std::filesystem::path& file);
+  ~Store();
+  Store(const Store&) = delete;
+  Store& operator=(const Store&) = delete;
+
+  std::set<std::string> keys() const;  // job keys of every stored run
+  bool has(const std::string& key) const;
+  std::size_t count() const;
+
+  // Store one finished run in one transaction. Throws if the key is already stored.
+  void put(const JobIdentity& id, const RunRecord& record);
+
+  // Every stored run (of one study, when given), in job-key order.
+  std::vector<StoredRun> load(const std::optional<std::string>& study = std::nullopt) const;
+
+  // One table as CSV (header row; NULL = empty field; reals round-trip exactly).
+  void export_csv(const std::string& table, std::ostream& out) const;
+  static const std::vector<std::string>& tables();  // runs, crossings, avalanches, clogs
+
+ private:
+  sqlite3* db_ = nullptr;
+  mutable std::mutex mutex_;
+};
+
+}  // namespace gapflow

@@ -1,0 +1,331 @@
+// Strict study loader (toml++). Each table is read through a StrictTable that
+// knows its allowed keys: an unknown key (usually a typo) is reported first,
+// before any "missing key" it may have caused, and reading a key that is not
+// in the list is a programming error, so the list cannot drift from the reader.
+#include "studies/study.hpp"
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace gapflow {
+
+namespace {
+
+// Shortest text that reads back to the same double (19.4, not toml++'s
+// 19.399999999999999), spelled as a float so that TOML does not read an integer.
+std::string number_text(double v) {
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // 'n': inf, nan
+  return s;
+}
+
+// The node as JSON spells it (for axes_json).
+std::string json_text(const toml::node& n) {
+  if (auto f = n.as_floating_point()) return number_text(f->get());
+  std::ostringstream os;
+  os << toml::json_formatter{n, toml::format_flags::none};
+  return os.str();
+}
+
+// The node as TOML spells it. Strings in JSON's double quotes: valid TOML basic
+// strings, and the same quoting the scenario loader's messages use.
+std::string toml_text(const toml::node& n) {
+  if (n.is_string() || n.is_floating_point()) return json_text(n);
+  std::ostringstream os;
+  n.visit([&](auto&& v) { os << v; });
+  return os.str();
+}
+
+SourceLocation location_of(const std::string& source, const toml::node& n) {
+  const auto& b = n.source().begin;
+  if (b.line == 0) return {source, 1, 1};
+  return {source, static_cast<int>(b.line), static_cast<int>(b.column)};
+}
+
+// The keys each table allows.
+const std::vector<std::string> kRootKeys{"study", "series", "quick"};
+const std::vector<std::string> kStudyKeys{"name", "description", "replicates", "models", "seed", "set"};
+const std::vector<std::string> kSeriesKeys{"label", "scenario", "set", "sweep"};
+const std::vector<std::string> kSweepKeys{"key", "values", "from", "to", "step"};
+const std::vector<std::string> kQuickKeys{"replicates", "models", "thin"};
+
+// A TOML table whose keys must all be understood.
+class StrictTable {
+ public:
+  StrictTable(const toml::table* t, std::string path, std::string source, std::vector<std::string> allowed)
+      : t_(t), path_(std::move(path)), source_(std::move(source)), allowed_(std::move(allowed)) {
+    reject_unknown();
+  }
+
+  SourceLocation at(const toml::node& n) const { return location_of(source_, n); }
+  SourceLocation here() const { return t_ ? at(*t_) : SourceLocation{source_, 1, 1}; }
+  std::string dotted(std::string_view key) const {
+    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+  }
+
+  const toml::node* get(std::string_view key) const {
+    if (std::find(allowed_.begin(), allowed_.end(), key) == allowed_.end())
+      throw std::logic_error(fmt::format("study loader reads '{}' but does not allow it in [{}]", key, path_));
+    return t_ ? t_->get(key) : nullptr;
+  }
+  [[noreturn]] void fail(std::string_view key, const toml::node& n, const std::string& allowed) const {
+    throw ScenarioError(at(n), dotted(key), toml_text(n), allowed);
+  }
+  [[noreturn]] void missing(std::string_view key, const std::string& allowed) const {
+    throw ScenarioError(here(), dotted(key), "", allowed);
+  }
+
+  std::optional<std::string> text(std::string_view key, bool non_empty = false) {
+    const toml::node* n = get(key);
+    if (!n) return std::nullopt;
+    if (!n->is_string() || (non_empty && n->as_string()->get().empty()))
+      fail(key, *n, non_empty ? "must be a non-empty string" : "must be a string");
+    return n->as_string()->get();
+  }
+  std::optional<std::int64_t> integer(std::string_view key, std::int64_t lo) {
+    const toml::node* n = get(key);
+    if (!n) return std::nullopt;
+    if (!n->is_integer() || n->as_integer()->get() < lo) fail(key, *n, fmt::format("must be an integer >= {}", lo));
+    return n->as_integer()->get();
+  }
+  const toml::array* array(std::string_view key, const char* of) {
+    const toml::node* n = get(key);
+    if (n && !n->is_array()) fail(key, *n, fmt::format("must be an array of {}", of));
+    return n ? n->as_array() : nullptr;
+  }
+
+  void reject_unknown() const {
+    if (!t_) return;
+    for (const auto& [k, n] : *t_) {
+      if (std::find(allowed_.begin(), allowed_.end(), k.str()) != allowed_.end()) continue;
+      std::string list;
+      for (const auto& a : allowed_) list += (list.empty() ? "" : ", ") + a;
+      const std::string where =
+          path_.empty() ? "unknown section; allowed at the top level" : "unknown key; allowed in [" + path_ + "]";
+      throw ScenarioError(at(n), dotted(k.str()), toml_text(n), fmt::format("{}: {}", where, list));
+    }
+  }
+
+ private:
+  const toml::table* t_;
+  std::string path_, source_;
+  std::vector<std::string> allowed_;
+};
+
+// run.seed and run.replicate belong to the job ([study] seed, replicates): an
+// override of them would be silently replaced and several points would collapse.
+bool reserved_key(std::string_view key) {
+  auto trimmed = key.substr(0, key.find_last_not_of(" \t") + 1);
+  trimmed.remove_prefix(std::min(trimmed.find_first_not_of(" \t"), trimmed.size()));
+  return trimmed == "run.seed" || trimmed == "run.replicate";
+}
+constexpr const char* kReserved = "run.seed and run.replicate are set per job: use [study] seed and replicates";
+
+std::vector<ModelKind> read_models(StrictTable& t) {
+  const toml::array* a = t.array("models", "model names");
+  if (!a) return {ModelKind::box2d};
+  const char* allowed = "must be a non-empty array of distinct models, each \"2d\" or \"3d\"";
+  std::vector<ModelKind> out;
+  for (const toml::node& n : *a) {
+    if (!n.is_string() || (n.as_string()->get() != "2d" && n.as_string()->get() != "3d"))
+      throw ScenarioError(t.at(n), t.dotted("models"), toml_text(n), allowed);
+    ModelKind k = parse_model_kind(n.as_string()->get());
+    if (std::find(out.begin(), out.end(), k) != out.end())
+      throw ScenarioError(t.at(n), t.dotted("models"), toml_text(n), allowed);
+    out.push_back(k);
+  }
+  if (out.empty()) t.fail("models", *t.get("models"), allowed);
+  return out;
+}
+
+std::vector<LocatedOverride> read_set(StrictTable& t) {
+  std::vector<LocatedOverride> out;
+  const toml::array* a = t.array("set", "\"key=value\" strings");
+  if (!a) return out;
+  for (const toml::node& n : *a) {
+    if (!n.is_string() || n.as_string()->get().find('=') == std::string::npos)
+      throw ScenarioError(t.at(n), t.dotted("set"), toml_text(n),
+                          "each entry must be a \"key=value\" string, e.g. \"run.time_limit_s=300\"");
+    const std::string& text = n.as_string()->get();
+    if (reserved_key(std::string_view(text).substr(0, text.find('='))))
+      throw ScenarioError(t.at(n), t.dotted("set"), toml_text(n), kReserved);
+    out.push_back({text, t.at(n)});
+  }
+  return out;
+}
+
+AxisValue axis_value(const toml::node& n, SourceLocation where) { return {toml_text(n), json_text(n), where}; }
+
+// from/to/step, inclusive. Integers stay integers (counts); other values are
+// rounded to 12 significant digits so that 0.1 + 2 * 0.1 reads "0.3".
+std::vector<AxisValue> range_values(StrictTable& t, const toml::node& from, const toml::node& to,
+                                    const toml::node& step) {
+  const char* numeric = "must be a number";
+  if (!from.is_number()) t.fail("from", from, numeric);
+  if (!to.is_number()) t.fail("to", to, numeric);
+  if (!step.is_number() || step.value<double>().value() <= 0) t.fail("step", step, "must be a number > 0");
+  const double lo = from.value<double>().value(), hi = to.value<double>().value(), dv = step.value<double>().value();
+  if (hi < lo) t.fail("to", to, fmt::format("must be >= from ({})", toml_text(from)));
+  const double steps = std::floor((hi - lo) / dv + 1e-9);
+  if (steps > 100000) t.fail("step", step, "gives more than 100000 values");
+  const bool integral = from.is_integer() && to.is_integer() && step.is_integer();
+  std::vector<AxisValue> out;
+  for (int i = 0; i <= static_cast<int>(steps); ++i) {
+    if (integral) {
+      out.push_back(axis_value(toml::value<std::int64_t>(from.as_integer()->get() + i * step.as_integer()->get()),
+                               t.at(from)));
+    } else {
+      double v = std::stod(fmt::format("{:.12g}", lo + i * dv));
+      out.push_back(axis_value(toml::value<double>(v), t.at(from)));
+    }
+  }
+  return out;
+}
+
+SweepAxis read_axis(StrictTable t) {
+  SweepAxis axis;
+  auto key = t.text("key", true);
+  if (!key) t.missing("key", "required: a scenario key, e.g. \"obstruction.distance_mm\"");
+  axis.key = *key;
+  if (reserved_key(axis.key)) t.fail("key", *t.get("key"), kReserved);
+  const toml::array* values = t.array("values", "numbers, strings or booleans");
+  const toml::node *from = t.get("from"), *to = t.get("to"), *step = t.get("step");
+  const bool ranged = from || to || step;
+  const char* either = "give either values = [...] or from, to and step";
+  if (values && ranged) t.fail("values", *t.get("values"), either);
+  if (ranged) {
+    if (!from) t.missing("from", either);
+    if (!to) t.missing("to", either);
+    if (!step) t.missing("step", either);
+    axis.values = range_values(t, *from, *to, *step);
+  } else {
+    if (!values) t.missing("values", either);
+    if (values->empty()) t.fail("values", *values, "must not be empty");
+    for (const toml::node& n : *values) {
+      if (!n.is_number() && !n.is_string() && !n.is_boolean())
+        throw ScenarioError(t.at(n), t.dotted("values"), toml_text(n), "each value must be a number, string or boolean");
+      axis.values.push_back(axis_value(n, t.at(n)));
+    }
+  }
+  return axis;
+}
+
+// Array-of-tables entries, or an error when the key is not one.
+std::vector<const toml::table*> table_array(StrictTable& t, std::string_view key, const char* example) {
+  std::vector<const toml::table*> out;
+  const toml::node* n = t.get(key);
+  if (!n) return out;
+  if (!n->is_array_of_tables()) t.fail(key, *n, fmt::format("must be an array of tables ({})", example));
+  for (const toml::node& e : *n->as_array()) out.push_back(e.as_table());
+  return out;
+}
+
+SeriesDef read_series(StrictTable t, const std::string& source, const std::filesystem::path& base_dir) {
+  SeriesDef s;
+  auto label = t.text("label", true);
+  if (!label) t.missing("label", "required: a non-empty string, unique in the study");
+  s.label = *label;
+  auto scenario = t.text("scenario", true);
+  if (!scenario) t.missing("scenario", "required: a scenario file, relative to the study file");
+  s.scenario = base_dir / *scenario;
+  s.set = read_set(t);
+  std::set<std::string> keys;
+  for (const toml::table* a : table_array(t, "sweep", "[[series.sweep]]")) {
+    SweepAxis axis = read_axis(StrictTable(a, "series.sweep", source, kSweepKeys));
+    if (!keys.insert(axis.key).second)
+      throw ScenarioError(location_of(source, *a->get("key")), "series.sweep.key", "\"" + axis.key + "\"",
+                          "each key may be swept once per series");
+    s.axes.push_back(std::move(axis));
+  }
+  return s;
+}
+
+QuickDef read_quick(StrictTable t) {
+  QuickDef q;
+  if (auto r = t.integer("replicates", 1)) q.replicates = static_cast<int>(*r);
+  if (t.get("models")) q.models = read_models(t);
+  if (auto k = t.integer("thin", 1)) q.thin = static_cast<int>(*k);
+  return q;
+}
+
+void read_study_section(StrictTable t, StudyDef& d) {
+  auto name = t.text("name", true);
+  if (!name) t.missing("name", "required: a non-empty string (also the output folder results/<name>/)");
+  d.name = *name;
+  if (name->find_first_of("/\\") != std::string::npos)
+    t.fail("name", *t.get("name"), "must not contain / or \\ (it names a folder)");
+  if (auto desc = t.text("description")) d.description = *desc;
+  if (auto r = t.integer("replicates", 1)) d.replicates = static_cast<int>(*r);
+  d.models = read_models(t);
+  if (auto seed = t.integer("seed", 0)) d.seed = static_cast<std::uint64_t>(*seed);
+  d.set = read_set(t);
+}
+
+const toml::table* sub_table(StrictTable& root, std::string_view key) {
+  const toml::node* n = root.get(key);
+  if (n && !n->is_table()) root.fail(key, *n, fmt::format("must be a table [{}]", key));
+  return n ? n->as_table() : nullptr;
+}
+
+}  // namespace
+
+StudyDef parse_study(std::string_view text, std::string_view source_name, const std::filesystem::path& base_dir) {
+  const std::string source(source_name);
+  toml::table doc;
+  try {
+    doc = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    const auto& p = e.source().begin;
+    throw ScenarioError({source, static_cast<int>(std::max(1u, p.line)), static_cast<int>(std::max(1u, p.column))},
+                        "", "", std::string(e.description()));
+  }
+  StudyDef d;
+  StrictTable root(&doc, "", source, kRootKeys);
+  const toml::table* study = sub_table(root, "study");
+  if (!study) throw ScenarioError({source, 1, 1}, "study", "", "required: a [study] section with name");
+  read_study_section(StrictTable(study, "study", source, kStudyKeys), d);
+  std::set<std::string> labels;
+  for (const toml::table* t : table_array(root, "series", "[[series]]")) {
+    SeriesDef s = read_series(StrictTable(t, "series", source, kSeriesKeys), source, base_dir);
+    if (!labels.insert(s.label).second)
+      throw ScenarioError(location_of(source, *t->get("label")), "series.label", "\"" + s.label + "\"",
+                          "must be unique in the study");
+    d.series.push_back(std::move(s));
+  }
+  if (d.series.empty()) throw ScenarioError({source, 1, 1}, "series", "", "required: at least one [[series]]");
+  if (const toml::table* q = sub_table(root, "quick")) d.quick = read_quick(StrictTable(q, "quick", source, kQuickKeys));
+  return d;
+}
+
+StudyDef load_study(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the study file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  StudyDef d = parse_study(text.str(), file.string(), file.parent_path());
+  d.file = file;
+  return d;
+}
+
+std::vector<AxisValue> thin_values(const std::vector<AxisValue>& values, int thin) {
+  std::vector<AxisValue> out;
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (i % static_cast<std::size_t>(std::max(1, thin)) == 0 || i + 1 == values.size()) out.push_back(values[i]);
+  return out;
+}
+
+StudyDef apply_quick(StudyDef study) {
+  if (study.quick.replicates) study.replicates = *study.quick.replicates;
+  if (study.quick.models) study.models = *study.quick.models;
+  for (SeriesDef& s : study.series)
+    for (SweepAxis& a : s.axes) a.values = thin_values(a.values, study.quick.thin);
+  return study;
+}
+
+}  // namespace gapflow

@@ -1,0 +1,82 @@
+// Study description: which scenarios, which parameter sweeps, which models and
+// how many replicates. Loaded strictly from TOML (toml++), like a scenario:
+// unknown keys, wrong types and bad values are ScenarioErrors that say
+// file:line:column, the key, the value and what is allowed.
+//
+//   [study]     name, description, replicates, models, seed, set
+//   [[series]]  label, scenario (relative to the study file), set
+//     [[series.sweep]]  key + values, or key + from/to/step (inclusive)
+//   [quick]     replicates, models, thin  (what --quick changes)
+#pragma once
+
+#include "app/models.hpp"
+#include "common/scenario_loader.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace gapflow {
+
+// One scenario override ("key=value") and where the study file wrote it.
+struct LocatedOverride {
+  std::string text;
+  SourceLocation where;
+};
+
+// One value of a sweep axis.
+struct AxisValue {
+  std::string toml;     // literal as an override value: 70, 80.5, "cylinder", true
+  std::string json;     // literal for axes_json: same, but strings in JSON quoting
+  SourceLocation where; // of the value (or of `from` for a from/to/step axis)
+};
+
+// [[series.sweep]]: one scenario key and the values it takes.
+struct SweepAxis {
+  std::string key;  // dotted scenario key, e.g. obstruction.distance_mm
+  std::vector<AxisValue> values;
+};
+
+// [[series]]: one scenario file, its own overrides and a grid of sweep axes.
+struct SeriesDef {
+  std::string label;
+  std::filesystem::path scenario;  // resolved against the study file's folder
+  std::vector<LocatedOverride> set;
+  std::vector<SweepAxis> axes;     // grid = cartesian product; first axis varies slowest
+};
+
+// [quick]: a cheaper version of the study for a first look.
+struct QuickDef {
+  std::optional<int> replicates;
+  std::optional<std::vector<ModelKind>> models;
+  int thin = 1;  // keep every thin-th value of each axis (and always the first and the last)
+};
+
+struct StudyDef {
+  std::filesystem::path file;  // the study file ("" when parsed from text)
+  std::string name;
+  std::string description;
+  int replicates = 1;          // per point and model
+  std::vector<ModelKind> models{ModelKind::box2d};
+  std::uint64_t seed = 1;      // run.seed of every job
+  std::vector<LocatedOverride> set;  // overrides for every series
+  std::vector<SeriesDef> series;
+  QuickDef quick;
+};
+
+// Load and validate a study file. Scenario files and keys are checked later,
+// job by job, by expand_jobs() (jobs.hpp).
+StudyDef load_study(const std::filesystem::path& file);
+// Same, from text (tests). Scenario paths are resolved against base_dir.
+StudyDef parse_study(std::string_view text, std::string_view source_name, const std::filesystem::path& base_dir);
+
+// The study as `--quick` runs it: [quick] replicates and models, axes thinned.
+StudyDef apply_quick(StudyDef study);
+
+// Every thin-th element of an axis, always keeping the first and the last.
+std::vector<AxisValue> thin_values(const std::vector<AxisValue>& values, int thin);
+
+}  // namespace gapflow
