@@ -1,7 +1,10 @@
 // gapflow: the command line.
 //   gapflow run SCENARIO.toml [--model 2d|3d] [--set key=value]... [--out record.json]
 //   gapflow check SCENARIO.toml [--set key=value]... [--print]
+//   gapflow study STUDY.toml [--quick] [--jobs N] [--db PATH] [--dry-run]
+//   gapflow export DB --table TABLE --csv OUT.csv
 // Exit codes: 0 success, 2 bad input (scenario or command line), 1 failure while running.
+#include "app/cmd_study.hpp"
 #include "app/models.hpp"
 #include "common/geometry.hpp"
 #include "common/scenario_loader.hpp"
@@ -180,6 +183,8 @@ int main(int argc, char** argv) {
   add_scenario_args(check, check_args);
   check->add_flag("--print", print, "Print the complete resolved scenario as canonical TOML");
 
+  gapflow::StudyCommands study_commands(app);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -189,6 +194,7 @@ int main(int argc, char** argv) {
     return kBadInput;
   }
 
+  if (auto code = study_commands.run()) return *code;
   try {
     if (*run) return cmd_run(run_args, model, out_path, quiet, replicates, jobs);
     if (*check) return cmd_check(check_args, print);

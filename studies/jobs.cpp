@@ -71,9 +71,11 @@ PointSpec point_spec(const StudyDef& study, const SeriesDef& s, const Point& p) 
   return spec;
 }
 
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the scenario file");
+std::string read_scenario_text(const SeriesDef& s) {
+  std::ifstream in(s.scenario, std::ios::binary);
+  if (!in)
+    throw ScenarioError(s.scenario_where, "series.scenario", "\"" + s.scenario.string() + "\"",
+                        fmt::format("cannot open the scenario file (relative to the study file) [series '{}']", s.label));
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
@@ -102,53 +104,69 @@ CompiledScenario compile_job(const Job& job) {
   }
 }
 
+namespace {
+
+// One job: its scenario resolved, validated and hashed.
+Job make_job(const StudyDef& study, const SeriesDef& s, const std::string& scenario_text, const Point& p,
+             const PointSpec& spec, ModelKind model, int replicate) {
+  std::vector<LocatedOverride> overrides = spec.overrides;
+  const SourceLocation seed_at{study.file.string(), 0, 0};
+  overrides.push_back({fmt::format("run.seed={}", study.seed), seed_at});
+  overrides.push_back({fmt::format("run.replicate={}", replicate), seed_at});
+  Job job;
+  for (const LocatedOverride& o : overrides) job.overrides.push_back(o.text);
+  try {
+    LoadedScenario loaded = parse_scenario(scenario_text, s.scenario.string(), job.overrides);
+    try {
+      const CompiledScenario sc = compile_scenario(loaded.def);
+      job.id.scenario_hash = sc.scenario_hash;
+      job.id.run_seed = sc.run_seed;
+    } catch (const ScenarioInvalid& e) {
+      throw locate(e, loaded);
+    }
+  } catch (const ScenarioError& e) {
+    rethrow_in_study(e, overrides, s, spec);
+  }
+  job.model = model;
+  job.scenario = s.scenario;
+  job.id.key = job_key(job.id.scenario_hash, model);
+  job.id.study = study.name;
+  job.id.series = s.label;
+  job.id.point = p.index;
+  job.id.point_label = spec.label;
+  job.id.axes_json = spec.json;
+  job.id.model = to_string(model);
+  job.id.replicate = replicate;
+  job.id.base_seed = study.seed;
+  return job;
+}
+
+// Two jobs with one key would be stored as one: name both points.
+void check_unique(std::map<std::string, std::size_t>& first_of_key, const std::vector<Job>& jobs, const Job& job,
+                  const PointSpec& spec, const std::string& study_file) {
+  auto [it, fresh] = first_of_key.emplace(job.id.key, jobs.size());
+  if (fresh) return;
+  const JobIdentity& other = jobs[it->second].id;
+  throw ScenarioError(spec.overrides.empty() ? SourceLocation{study_file, 0, 0} : spec.overrides.back().where,
+                      "series", "\"" + job.id.series + "\"",
+                      fmt::format("point '{}' resolves to the same scenario as series '{}' point '{}' (job key {}): "
+                                  "remove the duplicate",
+                                  job.id.point_label, other.series, other.point_label, job.id.key));
+}
+
+}  // namespace
+
 std::vector<Job> expand_jobs(const StudyDef& study) {
   std::vector<Job> jobs;
-  std::map<std::string, std::size_t> first_of_key;  // a repeated key would silently merge two jobs
-  const SourceLocation seed_at{study.file.string(), 0, 0};
+  std::map<std::string, std::size_t> first_of_key;
   for (const SeriesDef& s : study.series) {
-    const std::string text = read_text(s.scenario);  // once per series, not once per job
+    const std::string text = read_scenario_text(s);  // once per series, not once per job
     for (const Point& p : grid_points(s)) {
       const PointSpec spec = point_spec(study, s, p);
       for (ModelKind model : study.models) {
         for (int r = 0; r < study.replicates; ++r) {
-          std::vector<LocatedOverride> overrides = spec.overrides;
-          overrides.push_back({fmt::format("run.seed={}", study.seed), seed_at});
-          overrides.push_back({fmt::format("run.replicate={}", r), seed_at});
-          std::vector<std::string> plain;
-          for (const LocatedOverride& o : overrides) plain.push_back(o.text);
-          Job job;
-          try {
-            LoadedScenario loaded = parse_scenario(text, s.scenario.string(), plain);
-            try {
-              const CompiledScenario sc = compile_scenario(loaded.def);
-              job.id.scenario_hash = sc.scenario_hash;
-              job.id.run_seed = sc.run_seed;
-            } catch (const ScenarioInvalid& e) {
-              throw locate(e, loaded);
-            }
-          } catch (const ScenarioError& e) {
-            rethrow_in_study(e, overrides, s, spec);
-          }
-          job.model = model;
-          job.scenario = s.scenario;
-          job.overrides = std::move(plain);
-          job.id.key = job_key(job.id.scenario_hash, model);
-          job.id.study = study.name;
-          job.id.series = s.label;
-          job.id.point = p.index;
-          job.id.point_label = spec.label;
-          job.id.axes_json = spec.json;
-          job.id.model = to_string(model);
-          job.id.replicate = r;
-          job.id.base_seed = study.seed;
-          if (auto [it, fresh] = first_of_key.emplace(job.id.key, jobs.size()); !fresh) {
-            const JobIdentity& other = jobs[it->second].id;
-            throw ScenarioError(spec.overrides.empty() ? seed_at : spec.overrides.back().where, "series", s.label,
-                                fmt::format("point '{}' resolves to the same scenario as series '{}' point '{}' "
-                                            "(job key {}): remove the duplicate",
-                                            spec.label, other.series, other.point_label, job.id.key));
-          }
+          Job job = make_job(study, s, text, p, spec, model, r);
+          check_unique(first_of_key, jobs, job, spec, study.file.string());
           jobs.push_back(std::move(job));
         }
       }

@@ -234,6 +234,7 @@ SeriesDef read_series(StrictTable t, const std::string& source, const std::files
   auto scenario = t.text("scenario", true);
   if (!scenario) t.missing("scenario", "required: a scenario file, relative to the study file");
   s.scenario = base_dir / *scenario;
+  s.scenario_where = t.at(*t.get("scenario"));
   s.set = read_set(t);
   std::set<std::string> keys;
   for (const toml::table* a : table_array(t, "sweep", "[[series.sweep]]")) {

@@ -44,6 +44,7 @@ struct SweepAxis {
 struct SeriesDef {
   std::string label;
   std::filesystem::path scenario;  // resolved against the study file's folder
+  SourceLocation scenario_where;   // of `scenario = ...` in the study file
   std::vector<LocatedOverride> set;
   std::vector<SweepAxis> axes;     // grid = cartesian product; first axis varies slowest
 };
