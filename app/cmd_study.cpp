@@ -1,6 +1,7 @@
 #include "app/cmd_study.hpp"
 
 #include "studies/jobs.hpp"
+#include "studies/confirm.hpp"
 #include "studies/runner.hpp"
 #include "studies/store.hpp"
 #include "studies/study.hpp"
@@ -88,6 +89,24 @@ void print_dry_run(const StudyDef& study, const std::vector<Job>& jobs, const st
   std::cout << fmt::format("{:24s} {:5s} {:6d} {:7d}\n", "total", "", jobs.size(), total_stored);
 }
 
+// Screen -> confirm: rank the screened points and run the best again with the confirming model.
+RunnerSummary run_confirm_stage(const StudyDef& study, Store& store, const RunnerOptions& options,
+                                RunnerSummary screen) {
+  const std::vector<RankedPoint> ranked = rank_screened_points(study, store.load(study.name));
+  std::cerr << fmt::format("screen ranking by mean J_{} (best first; the top {} are confirmed with {}):\n",
+                           study.confirm.rank_by, study.confirm.top, to_string(study.confirm.model));
+  for (size_t i = 0; i < ranked.size() && i < static_cast<size_t>(study.confirm.top) + 5; ++i)
+    std::cerr << fmt::format("  {:2d}. {:12s} {:40s} J = {:8.2f} /s ({} runs)\n", i + 1, ranked[i].series,
+                             ranked[i].point_label, ranked[i].mean_j, ranked[i].runs);
+  const RunnerSummary c = run_jobs(confirm_jobs(study, ranked), store, options);
+  screen.total += c.total;
+  screen.already_stored += c.already_stored;
+  screen.done_now += c.done_now;
+  screen.failed.insert(screen.failed.end(), c.failed.begin(), c.failed.end());
+  screen.cancelled = c.cancelled;
+  return screen;
+}
+
 int cmd_study(const StudyCommands::Options& o) {
   StudyDef study = load_study(o.study_file);
   if (o.quick) study = apply_quick(std::move(study));
@@ -107,7 +126,8 @@ int cmd_study(const StudyCommands::Options& o) {
   options.cancel = &g_cancel;
   options.progress = &std::cerr;
   options.tty = isatty(STDERR_FILENO) != 0;
-  const RunnerSummary s = run_jobs(jobs, store, options);
+  RunnerSummary s = run_jobs(jobs, store, options);
+  if (!s.cancelled && s.failed.empty() && study.confirm.enabled) s = run_confirm_stage(study, store, options, s);
   if (s.cancelled) {
     std::cerr << fmt::format("interrupted: {} runs stored in {} ({} of this study's {} jobs); run the same command "
                              "again to resume\n",

@@ -133,6 +133,8 @@ struct Box2DDef {
   int velocity_iterations = 8;
   int position_iterations = 3;
   bool sleeping = false;            // engine sleeping freezes slow particles and fakes clogs
+  bool continuous_collision = false;// Box2D's time-of-impact pass: 19 % of the instructions, unneeded while a
+                                    // particle moves < 0.1 d per step against walls thicker than d
   double engine_diameter = 1.0;     // engine length units per nominal particle diameter (Froude scaling)
   Box2DRollingDef rolling;
   Box2DBaseFrictionDef base_friction;

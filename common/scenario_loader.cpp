@@ -521,6 +521,7 @@ void read_box2d(Section s, Box2DDef& b) {
   s.integer("velocity_iterations", b.velocity_iterations, 1, 1000);
   s.integer("position_iterations", b.position_iterations, 0, 1000);
   s.boolean("sleeping", b.sleeping);
+  s.boolean("continuous_collision", b.continuous_collision);
   s.number("engine_diameter", b.engine_diameter, closed(0.05, 20));
   Section rolling = s.section("rolling");
   Section base = s.section("base_friction");
@@ -780,6 +781,7 @@ void write_model(TomlWriter& w, const ModelDef& m) {
   w.put("velocity_iterations", m.box2d.velocity_iterations);
   w.put("position_iterations", m.box2d.position_iterations);
   w.put("sleeping", m.box2d.sleeping);
+  w.put("continuous_collision", m.box2d.continuous_collision);
   w.put("engine_diameter", m.box2d.engine_diameter);
   w.section("model.box2d.rolling");
   w.put("enabled", m.box2d.rolling.enabled);

@@ -87,6 +87,7 @@ std::unique_ptr<World2D> build_world2d(const CompiledScenario& sc, const BodyMod
   const double g_plane = w->scale.to_engine_acceleration(sc.inplane_gravity()) * model.gravity_factor;
   w->world = std::make_unique<b2World>(b2Vec2(0.0f, static_cast<float>(-g_plane)));
   w->world->SetAllowSleeping(engine.sleeping);
+  w->world->SetContinuousPhysics(engine.continuous_collision);
   w->listener = std::make_unique<PairMaterials>(static_cast<float>(def.particles.friction_particle),
                                                 static_cast<float>(def.particles.friction_wall));
   w->world->SetContactListener(w->listener.get());

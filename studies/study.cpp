@@ -49,11 +49,15 @@ SourceLocation location_of(const std::string& source, const toml::node& n) {
 }
 
 // The keys each table allows.
-const std::vector<std::string> kRootKeys{"study", "series", "quick"};
+const std::vector<std::string> kRootKeys{"study", "series", "quick", "confirm", "report"};
 const std::vector<std::string> kStudyKeys{"name", "description", "replicates", "models", "seed", "set"};
 const std::vector<std::string> kSeriesKeys{"label", "scenario", "set", "sweep"};
 const std::vector<std::string> kSweepKeys{"key", "values", "from", "to", "step"};
 const std::vector<std::string> kQuickKeys{"replicates", "models", "thin"};
+const std::vector<std::string> kConfirmKeys{"model", "top", "replicates", "rank_by"};
+const std::vector<std::string> kReportKeys{"kind", "baseline", "j"};
+const std::vector<std::string> kJKinds{"paper", "flowing", "mid"};
+const std::vector<std::string> kReportKinds{"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"};
 
 // A TOML table whose keys must all be understood.
 class StrictTable {
@@ -255,6 +259,46 @@ QuickDef read_quick(StrictTable t) {
   return q;
 }
 
+std::string one_of(StrictTable& t, std::string_view key, const std::vector<std::string>& allowed,
+                   const std::string& fallback) {
+  auto v = t.text(key);
+  if (!v) return fallback;
+  if (std::find(allowed.begin(), allowed.end(), *v) == allowed.end()) {
+    std::string list;
+    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    t.fail(key, *t.get(key), "one of: " + list);
+  }
+  return *v;
+}
+
+ConfirmDef read_confirm(StrictTable t) {
+  ConfirmDef c;
+  c.enabled = true;
+  c.model = parse_model_kind(one_of(t, "model", {"2d", "3d"}, "3d"));
+  if (auto k = t.integer("top", 1)) c.top = static_cast<int>(*k);
+  if (auto r = t.integer("replicates", 1)) c.replicates = static_cast<int>(*r);
+  c.rank_by = one_of(t, "rank_by", kJKinds, c.rank_by);
+  return c;
+}
+
+ReportDef read_report(StrictTable t) {
+  ReportDef r;
+  if (const toml::node* n = t.get("kind"); n && n->is_string()) {
+    r.kinds.push_back(one_of(t, "kind", kReportKinds, ""));
+  } else if (const toml::array* a = t.array("kind", "analysis names")) {
+    for (const toml::node& k : *a) {
+      if (!k.is_string() || std::find(kReportKinds.begin(), kReportKinds.end(), k.as_string()->get()) ==
+                                kReportKinds.end())
+        throw ScenarioError(t.at(k), t.dotted("kind"), toml_text(k),
+                            "each one of: flow_vs_gap, flow_vs_distance, clogging, models, screen_confirm");
+      r.kinds.push_back(k.as_string()->get());
+    }
+  }
+  if (auto b = t.text("baseline", true)) r.baseline = *b;
+  r.j = one_of(t, "j", kJKinds, r.j);
+  return r;
+}
+
 void read_study_section(StrictTable t, StudyDef& d) {
   auto name = t.text("name", true);
   if (!name) t.missing("name", "required: a non-empty string (also the output folder results/<name>/)");
@@ -301,6 +345,14 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
   }
   if (d.series.empty()) throw ScenarioError({source, 1, 1}, "series", "", "required: at least one [[series]]");
   if (const toml::table* q = sub_table(root, "quick")) d.quick = read_quick(StrictTable(q, "quick", source, kQuickKeys));
+  if (const toml::table* c = sub_table(root, "confirm"))
+    d.confirm = read_confirm(StrictTable(c, "confirm", source, kConfirmKeys));
+  if (const toml::table* r = sub_table(root, "report")) {
+    StrictTable rt(r, "report", source, kReportKeys);
+    d.report = read_report(rt);
+    if (!d.report.baseline.empty() && !labels.count(d.report.baseline))
+      rt.fail("baseline", *r->get("baseline"), "must be the label of one of the study's [[series]]");
+  }
   return d;
 }
 
@@ -324,6 +376,7 @@ std::vector<AxisValue> thin_values(const std::vector<AxisValue>& values, int thi
 StudyDef apply_quick(StudyDef study) {
   if (study.quick.replicates) study.replicates = *study.quick.replicates;
   if (study.quick.models) study.models = *study.quick.models;
+  if (study.quick.replicates) study.confirm.replicates = std::min(study.confirm.replicates, *study.quick.replicates);
   for (SeriesDef& s : study.series)
     for (SweepAxis& a : s.axes) a.values = thin_values(a.values, study.quick.thin);
   return study;

@@ -7,6 +7,8 @@
 //   [[series]]  label, scenario (relative to the study file), set
 //     [[series.sweep]]  key + values, or key + from/to/step (inclusive)
 //   [quick]     replicates, models, thin  (what --quick changes)
+//   [confirm]   model, top, replicates, rank_by  (screen -> confirm)
+//   [report]    kind (string or list), baseline, j
 #pragma once
 
 #include "app/models.hpp"
@@ -56,6 +58,23 @@ struct QuickDef {
   int thin = 1;  // keep every thin-th value of each axis (and always the first and the last)
 };
 
+// [confirm]: screen -> confirm. After the study's jobs (the screen, usually
+// 2D), the `top` points with the highest mean J are run again with `model`.
+struct ConfirmDef {
+  bool enabled = false;
+  ModelKind model = ModelKind::bullet;
+  int top = 3;                     // points confirmed (over all series)
+  int replicates = 10;             // per confirmed point
+  std::string rank_by = "paper";   // J used for ranking: paper | flowing | mid
+};
+
+// [report]: which experiment analyses `gapflow report` runs (studies/report*.cpp).
+struct ReportDef {
+  std::vector<std::string> kinds;  // flow_vs_gap, flow_vs_distance, clogging, models, screen_confirm
+  std::string baseline;            // series label of the no-obstruction reference ("" = none)
+  std::string j = "paper";         // J used by the analyses: paper | flowing | mid
+};
+
 struct StudyDef {
   std::filesystem::path file;  // the study file ("" when parsed from text)
   std::string name;
@@ -66,6 +85,8 @@ struct StudyDef {
   std::vector<LocatedOverride> set;  // overrides for every series
   std::vector<SeriesDef> series;
   QuickDef quick;
+  ConfirmDef confirm;
+  ReportDef report;
 };
 
 // Load and validate a study file. Scenario files and keys are checked later,

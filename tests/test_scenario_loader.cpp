@@ -373,6 +373,7 @@ void expect_same_model(const gapflow::ModelDef& a, const gapflow::ModelDef& b) {
   EXPECT_EQ(a.box2d.velocity_iterations, b.box2d.velocity_iterations);
   EXPECT_EQ(a.box2d.position_iterations, b.box2d.position_iterations);
   EXPECT_EQ(a.box2d.sleeping, b.box2d.sleeping);
+  EXPECT_EQ(a.box2d.continuous_collision, b.box2d.continuous_collision);
   EXPECT_EQ(a.box2d.engine_diameter, b.box2d.engine_diameter);
   EXPECT_EQ(a.box2d.rolling.enabled, b.box2d.rolling.enabled);
   EXPECT_EQ(a.box2d.rolling.inertia_factor, b.box2d.rolling.inertia_factor);
@@ -404,6 +405,9 @@ void expect_same(const ScenarioDef& a, const ScenarioDef& b) {
   expect_same_obstruction(a.obstruction, b.obstruction);
   expect_same(a.shaking.walls, b.shaking.walls);
   expect_same(a.shaking.obstruction, b.shaking.obstruction);
+  EXPECT_EQ(a.protocol.clog_breaking, b.protocol.clog_breaking);
+  EXPECT_EQ(a.protocol.reinject_passed, b.protocol.reinject_passed);
+  EXPECT_EQ(a.protocol.perturb_radius_d, b.protocol.perturb_radius_d);
   EXPECT_EQ(a.run.end, b.run.end);
   EXPECT_EQ(a.run.time_limit_s, b.run.time_limit_s);
   EXPECT_EQ(a.run.n_passed, b.run.n_passed);
@@ -431,8 +435,9 @@ ScenarioDef all_fields_changed() {
   d.obstruction.lateral_offset_mm = -1e-7;
   d.shaking.walls = {true, 0.75, 90.0, false, 0.5, 2.0, 1.5, 30.0};
   d.shaking.obstruction = {true, 1.0, -45.0, false, 0.25, 0.5, 0.1, 7.5};
-  d.run = {gapflow::EndCondition::n_passed, 120.0, 400, 2.5, 10.0, 1234567890123ull, 3};
-  d.model.box2d = {0.001, 12, 4, true, 2.5, {false, 2.0 / 3.0}, {false, gapflow::BaseFrictionMethod::joint}};
+  d.run = {gapflow::EndCondition::time_limit, 120.0, 400, 2.5, 10.0, 1234567890123ull, 3};
+  d.protocol = {gapflow::ClogBreaking::local_perturbation, true, 4.5};
+  d.model.box2d = {0.0004, 12, 4, true, true, 2.5, {false, 2.0 / 3.0}, {false, gapflow::BaseFrictionMethod::joint}};
   d.model.bullet = {0.0005, 4, 50, true, 10.0, 3.5, 0.05};
   return d;
 }

@@ -1,0 +1,66 @@
+#include "app/cmd_report.hpp"
+
+#include "common/scenario_loader.hpp"
+#include "studies/report.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+namespace gapflow {
+
+struct ReportCommand::Options {
+  CLI::App* cmd = nullptr;
+  std::string results, study, out;
+  bool no_plots = false;
+};
+
+namespace {
+
+constexpr int kFailure = 1;
+constexpr int kBadInput = 2;
+
+int cmd_report(const ReportCommand::Options& o) {
+  ReportRequest r;
+  r.results = o.results;
+  if (!o.study.empty()) r.study = o.study;
+  if (!o.out.empty()) r.out = o.out;
+  r.plots = !o.no_plots;
+  make_report(r, std::cout, std::cerr);
+  return 0;
+}
+
+}  // namespace
+
+ReportCommand::ReportCommand(CLI::App& app) : o_(std::make_unique<Options>()) {
+  Options& o = *o_;
+  o.cmd = app.add_subcommand("report",
+                             "Analyse a study's results store: "
+                             "points.csv, tables, plots and report.md");
+  o.cmd->add_option("results", o.results, "Results store (runs.sqlite) or its folder, e.g. results/tiny/")->required();
+  o.cmd->add_option("--study", o.study,
+                    "Study file (TOML): description, and the [report] table (analysis kind, "
+                    "baseline, J kind)");
+  o.cmd->add_option("--out", o.out, "Output folder (default: the store's folder)");
+  o.cmd->add_flag("--no-plots", o.no_plots, "Do not call Python for the PNG plots");
+}
+
+ReportCommand::~ReportCommand() = default;
+
+std::optional<int> ReportCommand::run() const {
+  if (!o_->cmd->parsed()) return std::nullopt;
+  try {
+    return cmd_report(*o_);
+  } catch (const ScenarioError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kBadInput;
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "gapflow failed: " << e.what() << "\n";
+    return kFailure;
+  }
+}
+
+}  // namespace gapflow

@@ -1,0 +1,61 @@
+#include "studies/confirm.hpp"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+namespace gapflow {
+
+namespace {
+
+std::optional<double> j_of(const RunRecord& r, const std::string& kind) {
+  if (kind == "flowing") return r.j_flowing;
+  if (kind == "mid") return r.j_mid;
+  return r.j_paper;
+}
+
+}  // namespace
+
+std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::vector<StoredRun>& runs) {
+  std::set<std::string> screen_models;
+  for (ModelKind m : study.models) screen_models.insert(to_string(m));
+  std::map<std::pair<std::string, int>, RankedPoint> points;
+  std::map<std::pair<std::string, int>, std::pair<double, int>> sums;  // sum of J, runs with J
+  for (const StoredRun& r : runs) {
+    if (r.id.study != study.name || !screen_models.count(r.id.model)) continue;
+    const auto k = std::make_pair(r.id.series, r.id.point);
+    RankedPoint& p = points[k];
+    p.series = r.id.series;
+    p.point = r.id.point;
+    p.point_label = r.id.point_label;
+    ++p.runs;
+    if (auto j = j_of(r.record, study.confirm.rank_by)) {
+      sums[k].first += *j;
+      sums[k].second += 1;
+    }
+  }
+  std::vector<RankedPoint> out;
+  for (auto& [k, p] : points) {
+    const auto& [sum, n] = sums[k];
+    p.mean_j = n > 0 ? sum / n : -1.0;
+    out.push_back(p);
+  }
+  // Best first; ties in study order (series label, then point) so the choice is deterministic.
+  std::stable_sort(out.begin(), out.end(), [](const RankedPoint& a, const RankedPoint& b) { return a.mean_j > b.mean_j; });
+  return out;
+}
+
+std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoint>& ranked) {
+  std::set<std::pair<std::string, int>> chosen;
+  for (size_t i = 0; i < ranked.size() && static_cast<int>(i) < study.confirm.top; ++i)
+    chosen.insert({ranked[i].series, ranked[i].point});
+  StudyDef confirming = study;
+  confirming.models = {study.confirm.model};
+  confirming.replicates = study.confirm.replicates;
+  std::vector<Job> out;
+  for (Job& j : expand_jobs(confirming))
+    if (chosen.count({j.id.series, j.id.point})) out.push_back(std::move(j));
+  return out;
+}
+
+}  // namespace gapflow

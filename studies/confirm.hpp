@@ -1,0 +1,30 @@
+// Screen -> confirm: rank the screened points of a study by mean J and run the
+// best ones again with the confirming model (usually 3D), so that a cheap 2D
+// screen over a fine grid ends in a few expensive 3D runs.
+#pragma once
+
+#include "studies/jobs.hpp"
+#include "studies/store.hpp"
+#include "studies/study.hpp"
+
+#include <vector>
+
+namespace gapflow {
+
+struct RankedPoint {
+  std::string series;
+  int point = 0;
+  std::string point_label;
+  double mean_j = 0;  // particles/s, over the screen's replicates
+  int runs = 0;
+};
+
+// The screen's points (the study's own models, from the store), best first.
+// Points where J is undefined in every run rank last.
+std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::vector<StoredRun>& runs);
+
+// The confirming jobs: study.confirm.replicates runs with study.confirm.model for
+// each of the top study.confirm.top ranked points (job keys as in expand_jobs).
+std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoint>& ranked);
+
+}  // namespace gapflow

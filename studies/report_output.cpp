@@ -1,0 +1,252 @@
+// Report output: report.md and make_report(), which writes every file of a
+// report.
+#include "studies/report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <functional>
+#include <ostream>
+#include <set>
+
+namespace gapflow {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string shell_quote(const std::string& s) {
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                        "0123456789/._-+=:") == std::string::npos)
+    return s;
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string hours(double s) { return fmt::format("{} s ({} h)", fmt_num(s, 4), fmt_num(s / 3600.0, 3)); }
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string out;
+  for (const std::string& s : v) out += (out.empty() ? "" : ", ") + s;
+  return out.empty() ? "none" : out;
+}
+
+std::vector<std::string> series_labels(const ReportData& d) {
+  std::vector<std::string> out;
+  for (const ReportPoint& p : d.points)
+    if (std::find(out.begin(), out.end(), p.series) == out.end()) out.push_back(p.series);
+  return out;
+}
+
+std::string what_was_run(const ReportData& d) {
+  const StudyInfo& s = d.study;
+  std::string versions;
+  for (const auto& [v, n] : d.code_versions)
+    versions += fmt::format("{}`{}` ({} runs)", versions.empty() ? "" : ", ", v, n);
+  std::string out = "## What was run\n\n";
+  out += fmt::format("- study: `{}`{}\n", s.name,
+                     s.file.empty() ? " (no study file given)" : ", file `" + s.file.string() + "`");
+  out += fmt::format("- runs: {} in {} points (series x model x point)\n", d.n_runs, d.points.size());
+  out += fmt::format("- series: {}\n", joined(series_labels(d)));
+  out += fmt::format("- models in the store: {}{}\n", joined(d.models),
+                     s.models.empty() ? "" : " (study file: " + joined(s.models) + ")");
+  out += fmt::format("- replicates per point and model: {}{}\n",
+                     d.min_replicates == d.max_replicates ? fmt::format("{}", d.min_replicates)
+                                                          : fmt::format("{}-{}", d.min_replicates, d.max_replicates),
+                     s.replicates ? fmt::format(" (study file: {})", *s.replicates) : "");
+  out += fmt::format("- code version(s): {}\n", versions.empty() ? "none" : versions);
+  out += fmt::format("- total wall time (sum over runs): {}; simulated time: {}\n", hours(d.total_wall_s),
+                     hours(d.total_sim_s));
+  out += fmt::format("- runs finished between {} and {} (UTC)\n", d.first_finished, d.last_finished);
+  std::vector<std::string> kinds;
+  for (ReportKind k : s.report.kinds) kinds.push_back(to_string(k));
+  out += fmt::format(
+      "- flow rate used for J* and comparisons: {}; baseline: {}; analyses: "
+      "{}\n\n",
+      to_string(s.report.j), s.report.baseline.empty() ? "none" : "'" + s.report.baseline + "'",
+      kinds.empty() ? "none (generic outputs only)" : joined(kinds));
+  return out;
+}
+
+std::string figure_links(const std::vector<PlotFigure>& figures, const std::vector<std::string>& pngs) {
+  std::string out;
+  for (const PlotFigure& f : figures)
+    if (std::find(pngs.begin(), pngs.end(), f.file) != pngs.end()) out += fmt::format("![{}]({})\n\n", f.title, f.file);
+  return out;
+}
+
+}  // namespace
+
+std::string render_report_markdown(const MarkdownInput& in) {
+  const ReportData& d = *in.data;
+  std::string out = fmt::format("# Study report: {}\n\n", d.study.name);
+  if (!d.study.description.empty()) out += d.study.description + "\n\n";
+  out += what_was_run(d);
+  out += "## Results by series and model\n\n";
+  out +=
+      "Means with Student-t 95 % intervals; J* = J sqrt(d/g), g = 9.81 "
+      "m/s^2; <s>: mean avalanche size "
+      "(censoring-aware); n/a: undefined (e.g. J_paper when no run passed "
+      "every particle). Every statistic "
+      "(bootstrap intervals, medians, 2-sigma-clipped means, decomposition) "
+      "is in points.csv.\n\n";
+  for (const TextTable& t : in.tables) out += render_markdown(t) + "\n";
+  out += "## Plots\n\n";
+  if (!in.plot_warning.empty()) out += "*No plots: " + in.plot_warning + "*\n\n";
+  out += figure_links(in.figures, in.pngs);
+  for (const ExperimentSection& e : in.experiments) {
+    out += "## Analysis: " + e.title + "\n\n";
+    for (const std::string& p : e.paragraphs) out += p + "\n\n";
+    for (const TextTable& t : e.tables) out += render_markdown(t) + "\n";
+    out += figure_links(e.figures, in.pngs);
+  }
+  out += "## Regenerate\n\n```sh\n" + in.command + "\n```\n";
+  return out;
+}
+
+std::string regenerate_command(const ReportRequest& r) {
+  std::string c = "gapflow report " + shell_quote(r.results.string());
+  if (r.study) c += " --study " + shell_quote(r.study->string());
+  if (r.out) c += " --out " + shell_quote(r.out->string());
+  if (!r.plots) c += " --no-plots";
+  return c;
+}
+
+// ---------------------------------------------------------------- make_report
+
+namespace {
+
+// Written under a temporary name and renamed when complete: never half a file.
+void write_atomically(const fs::path& path, const std::function<void(std::ostream&)>& write) {
+  const fs::path tmp = path.string() + ".partial";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw std::runtime_error("cannot write " + tmp.string());
+    write(out);
+    if (!out.flush()) throw std::runtime_error("error while writing " + tmp.string());
+  }
+  fs::rename(tmp, path);
+}
+
+fs::path store_file(const fs::path& results) {
+  const fs::path db = fs::is_directory(results) ? results / "runs.sqlite" : results;
+  // Checked first: opening a missing store would create an empty one.
+  if (!fs::exists(db)) throw std::invalid_argument("no results store at " + db.string());
+  return db;
+}
+
+std::vector<StoredRun> load_runs(const fs::path& db, const StudyInfo& info) {
+  const Store store(db);
+  std::vector<StoredRun> runs = store.load();
+  std::set<std::string> studies;
+  for (const StoredRun& r : runs) studies.insert(r.id.study);
+  std::string names;
+  for (const std::string& s : studies) names += (names.empty() ? "'" : ", '") + s + "'";
+  if (runs.empty()) throw std::invalid_argument("the results store " + db.string() + " holds no runs");
+  if (!info.name.empty()) {
+    if (!studies.count(info.name))
+      throw std::invalid_argument(
+          fmt::format("no runs of study '{}' in {} (it holds {})", info.name, db.string(), names));
+    std::erase_if(runs, [&](const StoredRun& r) { return r.id.study != info.name; });
+  } else if (studies.size() > 1) {
+    throw std::invalid_argument(fmt::format("{} holds several studies ({}): give --study", db.string(), names));
+  }
+  return runs;
+}
+
+// The generic figures with every section's fitted curves drawn in.
+std::vector<PlotFigure> all_figures(const ReportData& data, const std::vector<ExperimentSection>& experiments) {
+  std::vector<PlotFigure> figures = generic_figures(data, data.study.report.j);
+  for (PlotFigure& f : figures) {
+    bool fitted = false;
+    for (const ExperimentSection& e : experiments) {
+      auto it = e.overlays.find(f.file);
+      if (it == e.overlays.end()) continue;
+      for (const PlotLine& l : it->second)
+        if (!l.x.empty()) f.lines.push_back(l), fitted = true;
+    }
+    if (!fitted) continue;
+    for (PlotLine& l : f.lines)  // joined data points would hide the fitted curves
+      if (l.style == "errorbar") l.style = "markers";
+  }
+  return figures;
+}
+
+// Draws the figures with plot_study.py; the PNGs written, or a warning saying
+// why none.
+std::string draw(const std::vector<PlotFigure>& figures, const fs::path& dir, std::vector<std::string>& pngs) {
+  if (figures.empty()) return "nothing to plot (no swept numeric axis, no avalanche data)";
+  const auto python = find_python_with_matplotlib();
+  if (!python)
+    return "python3 with matplotlib was not found (install python3-matplotlib, "
+           "or set GAPFLOW_PYTHON)";
+  const fs::path script = plot_script_path();
+  if (!fs::exists(script)) return "the plot script " + script.string() + " is missing (set GAPFLOW_PLOT_SCRIPT)";
+  for (const PlotFigure& f : figures) fs::remove(dir / f.file);  // a stale PNG must not pass for a new one
+  const fs::path log = dir / "plots.log";
+  fs::remove(log);
+  const int rc = run_program({*python, script.string(), (dir / "plots.json").string(), dir.string()}, log);
+  for (const PlotFigure& f : figures)
+    if (fs::exists(dir / f.file)) pngs.push_back(f.file);
+  if (rc != 0) return fmt::format("{} failed (exit {}); its output is in {}", script.string(), rc, log.string());
+  fs::remove(log);
+  return pngs.size() == figures.size() ? "" : "some figures were not written";
+}
+
+void print_experiment(std::ostream& out, const ExperimentSection& e) {
+  out << "\n== " << e.title << " ==\n";
+  for (const std::string& p : e.paragraphs) out << p << "\n\n";
+  for (const TextTable& t : e.tables) out << render_text(t) << "\n";
+}
+
+}  // namespace
+
+ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::ostream& log) {
+  const fs::path db = store_file(request.results);
+  const StudyInfo info = request.study ? read_study_info(*request.study) : StudyInfo{};
+  const ReportData data = collect_report_data(load_runs(db, info), info);
+  const ReportOptions& opt = data.study.report;
+  if (!opt.baseline.empty() && std::none_of(data.points.begin(), data.points.end(),
+                                            [&](const ReportPoint& p) { return p.series == opt.baseline; }))
+    log << fmt::format("warning: the baseline series '{}' has no runs: no ratios\n", opt.baseline);
+
+  ReportOutcome o;
+  o.out_dir = request.out ? *request.out : (db.has_parent_path() ? db.parent_path() : fs::path("."));
+  fs::create_directories(o.out_dir);
+  o.n_points = data.points.size();
+  o.n_runs = data.n_runs;
+  o.points_csv = o.out_dir / "points.csv";
+  write_atomically(o.points_csv, [&](std::ostream& s) { write_points_csv(s, data); });
+
+  MarkdownInput md;
+  md.data = &data;
+  md.tables = point_tables(data, opt.j);
+  md.command = regenerate_command(request);
+  out << fmt::format("study '{}': {} runs, {} points\n\n", data.study.name, data.n_runs, data.points.size());
+  for (const TextTable& t : md.tables) out << render_text(t) << "\n";
+  md.experiments = experiment_sections(data, opt);
+  for (const ExperimentSection& e : md.experiments) print_experiment(out, e);
+
+  md.figures = all_figures(data, md.experiments);
+  std::vector<PlotFigure> to_draw = md.figures;
+  for (const ExperimentSection& e : md.experiments) to_draw.insert(to_draw.end(), e.figures.begin(), e.figures.end());
+  std::erase_if(to_draw,
+                [](const PlotFigure& f) {  // e.g. J* where no run passed every particle
+                  return std::all_of(f.lines.begin(), f.lines.end(), [](const PlotLine& l) { return l.x.empty(); });
+                });
+  write_atomically(o.out_dir / "plots.json", [&](std::ostream& s) { s << plot_spec_json(to_draw); });
+  md.plot_warning = request.plots ? draw(to_draw, o.out_dir, md.pngs) : "not requested (--no-plots)";
+  if (!md.plot_warning.empty()) log << "warning: no plots: " << md.plot_warning << "\n";
+  for (const std::string& f : md.pngs) o.pngs.push_back(o.out_dir / f);
+  o.plot_warning = md.plot_warning;
+
+  o.markdown = o.out_dir / "report.md";
+  write_atomically(o.markdown, [&](std::ostream& s) { s << render_report_markdown(md); });
+  out << fmt::format("wrote {}, {}, {} plot(s) in {}\n", o.points_csv.filename().string(),
+                     o.markdown.filename().string(), o.pngs.size(), o.out_dir.string());
+  return o;
+}
+
+}  // namespace gapflow

@@ -1,0 +1,223 @@
+// Report plots: which figures to draw (as a JSON spec for
+// studies/plot_study.py) and running Python.
+#include "studies/report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+extern char** environ;
+
+#ifndef GAPFLOW_PLOT_SCRIPT
+#define GAPFLOW_PLOT_SCRIPT "studies/plot_study.py"
+#endif
+
+namespace gapflow {
+
+// ---------------------------------------------------------------- JSON spec
+
+namespace {
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      out += fmt::format("\\u{:04x}", static_cast<unsigned>(c));
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+// JSON has no NaN: missing values are null (Python reads None and draws nothing
+// there).
+std::string json_number(double v) { return std::isfinite(v) ? fmt::format("{}", v) : "null"; }
+
+std::string json_array(const std::vector<double>& v) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + json_number(v[i]);
+  return out + "]";
+}
+
+std::string line_json(const PlotLine& l) {
+  return fmt::format(
+      "{{\"label\": {}, \"group\": {}, \"model\": {}, "
+      "\"style\": {}, \"x\": {}, \"y\": {}, \"ylo\": {}, "
+      "\"yhi\": {}, \"xlo\": {}, \"xhi\": {}}}",
+      json_string(l.label), json_string(l.group.empty() ? l.label : l.group), json_string(l.model),
+      json_string(l.style), json_array(l.x), json_array(l.y), json_array(l.ylo), json_array(l.yhi), json_array(l.xlo),
+      json_array(l.xhi));
+}
+
+std::string band_json(const PlotBand& b) {
+  return fmt::format("{{\"label\": {}, \"model\": {}, \"y\": {}, \"lo\": {}, \"hi\": {}}}", json_string(b.label),
+                     json_string(b.model), json_number(b.y), json_number(b.lo), json_number(b.hi));
+}
+
+template <class T, class F>
+std::string list_json(const std::vector<T>& items, F&& one, const char* indent) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ",\n" : "\n") + std::string(indent) + one(items[i]);
+  return out + "]";
+}
+
+}  // namespace
+
+std::string plot_spec_json(const std::vector<PlotFigure>& figures) {
+  auto figure = [](const PlotFigure& f) {
+    return fmt::format(
+        "{{\"file\": {}, \"title\": {}, \"xlabel\": {}, "
+        "\"ylabel\": {}, \"identity_line\": {},\n"
+        "   \"lines\": {},\n   \"bands\": {}}}",
+        json_string(f.file), json_string(f.title), json_string(f.xlabel), json_string(f.ylabel),
+        f.identity_line ? "true" : "false", list_json(f.lines, line_json, "    "),
+        list_json(f.bands, band_json, "    "));
+  };
+  return "{\"figures\": " + list_json(figures, figure, "  ") + "}\n";
+}
+
+// ---------------------------------------------------------------- generic
+// figures
+
+std::string j_star_figure_file(const std::string& x_name) {
+  std::string s = x_name == "W/d" ? "W_over_d" : x_name == "D/d" ? "D_over_d" : x_name;
+  std::replace_if(
+      s.begin(), s.end(), [](char c) { return !std::isalnum(static_cast<unsigned char>(c)) && c != '_'; }, '_');
+  return "j_star_vs_" + s + ".png";
+}
+
+namespace {
+
+std::string model_name(const std::string& m) { return m == "2d" ? "2D" : m == "3d" ? "3D" : m; }
+
+PlotLine j_star_line(const ReportData& data, const std::string& series, const std::string& model, const XAxis& x,
+                     JKind j) {
+  PlotLine l;
+  l.label = fmt::format("{} ({})", series, model_name(model));
+  l.model = model;
+  auto pts = points_of(data, series, model);
+  std::stable_sort(pts.begin(), pts.end(),
+                   [&](const ReportPoint* a, const ReportPoint* b) { return x_value(*a, x) < x_value(*b, x); });
+  for (const ReportPoint* p : pts) {
+    const MeanCI m = j_star(p->stats, j);
+    if (m.n == 0 || !std::isfinite(x_value(*p, x))) continue;  // no run with J defined: nothing to draw
+    l.x.push_back(x_value(*p, x));
+    l.y.push_back(m.mean);
+    l.ylo.push_back(m.lo);
+    l.yhi.push_back(m.hi);
+  }
+  return l;
+}
+
+// One band per model whose baseline series has a single point with J defined.
+std::vector<PlotBand> baseline_bands(const ReportData& data, JKind j) {
+  std::vector<PlotBand> out;
+  const std::string& b = data.study.report.baseline;
+  if (b.empty()) return out;
+  for (const std::string& model : data.models) {
+    const auto pts = points_of(data, b, model);
+    if (pts.size() != 1) continue;
+    const MeanCI m = j_star(pts.front()->stats, j);
+    if (m.n == 0) continue;
+    out.push_back({fmt::format("baseline '{}' ({}), 95% CI", b, model_name(model)), model, m.mean, m.lo, m.hi});
+  }
+  return out;
+}
+
+bool has_avalanche_data(const ReportData& data) {
+  return std::any_of(data.points.begin(), data.points.end(),
+                     [](const ReportPoint& p) { return p.stats.avalanches.size.n_uncensored > 0; });
+}
+
+PlotFigure clogging_figure(const ReportData& data) {
+  PlotFigure f{"clogging.png", "Avalanche size against the gap", "(W/d)^2", "ln(<s> + 1)", {}, {}, false};
+  for (const ClogSeries& cs : analyze_clogging(data).series) {
+    PlotLine l;
+    l.label = fmt::format("{} ({})", cs.series, model_name(cs.model));
+    l.model = cs.model;
+    for (const ClogPoint& c : cs.points) {
+      if (!std::isfinite(c.ln_s1)) continue;
+      l.x.push_back(c.w2), l.y.push_back(c.ln_s1), l.ylo.push_back(c.ln_lo), l.yhi.push_back(c.ln_hi);
+    }
+    if (!l.x.empty()) f.lines.push_back(std::move(l));
+  }
+  return f;
+}
+
+}  // namespace
+
+std::vector<PlotFigure> generic_figures(const ReportData& data, JKind j) {
+  std::vector<PlotFigure> figures;
+  const std::vector<PlotBand> bands = baseline_bands(data, j);
+  for (const auto& [series, model] : series_models(data)) {
+    const XAxis x = x_axis_of(data, series);
+    if (!x.valid())
+      continue;  // a single point without a swept value: in the tables (and the
+                 // band) only
+    const std::string file = j_star_figure_file(x.name);
+    auto it = std::find_if(figures.begin(), figures.end(), [&](const PlotFigure& f) { return f.file == file; });
+    if (it == figures.end()) {
+      figures.push_back({file,
+                         fmt::format("{}* = J sqrt(d/g) against {}", to_string(j), x.name),
+                         x.name,
+                         fmt::format("{}*  (mean, 95% CI)", to_string(j)),
+                         {},
+                         bands,
+                         false});
+      it = figures.end() - 1;
+    }
+    PlotLine l = j_star_line(data, series, model, x, j);
+    if (!l.x.empty()) it->lines.push_back(std::move(l));
+  }
+  if (has_avalanche_data(data)) figures.push_back(clogging_figure(data));
+  return figures;
+}
+
+// ---------------------------------------------------------------- running
+// Python
+
+int run_program(const std::vector<std::string>& argv, const std::filesystem::path& log) {
+  std::vector<std::string> args = argv;
+  std::vector<char*> c_args;
+  for (std::string& a : args) c_args.push_back(a.data());
+  c_args.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  const std::string target = log.empty() ? "/dev/null" : log.string();
+  posix_spawn_file_actions_addopen(&fa, 1, target.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = -1;
+  const int rc = posix_spawnp(&pid, c_args[0], &fa, nullptr, c_args.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) return -1;
+  int status = 0;
+  if (waitpid(pid, &status, 0) != pid) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::optional<std::string> find_python_with_matplotlib() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("GAPFLOW_PYTHON"); env && *env) candidates.push_back(env);
+  // A python3 first on PATH (pyenv, venv) may lack matplotlib while Debian's
+  // has it.
+  candidates.insert(candidates.end(), {"python3", "/usr/bin/python3"});
+  for (const std::string& c : candidates)
+    if (run_program({c, "-c", "import matplotlib"}, {}) == 0) return c;
+  return std::nullopt;
+}
+
+std::filesystem::path plot_script_path() {
+  if (const char* env = std::getenv("GAPFLOW_PLOT_SCRIPT"); env && *env) return env;
+  return GAPFLOW_PLOT_SCRIPT;
+}
+
+}  // namespace gapflow

@@ -1,0 +1,537 @@
+// `gapflow report`: the tiny study end to end (points.csv, report.md, PNGs),
+// and the experiment analyses on hand-built stored runs whose answers are
+// known.
+#include "studies/jobs.hpp"
+#include "studies/report.hpp"
+#include "studies/runner.hpp"
+#include "studies/store.hpp"
+#include "studies/study.hpp"
+#include "tests/test_support.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+using namespace gapflow;
+using gapflow::testing::source_path;
+namespace fs = std::filesystem;
+
+namespace {
+
+// ------------------------------------------------------------------ helpers
+
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = fs::temp_directory_path() / fmt::format("gapflow-report-{}-{}", getpid(), info ? info->name() : "x");
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_text(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+
+// CSV split on commas outside quotes (enough for points.csv).
+std::vector<std::string> csv_fields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"')
+      quoted = !quoted;
+    else if (c == ',' && !quoted)
+      out.emplace_back();
+    else
+      out.back() += c;
+  }
+  return out;
+}
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  std::size_t column(const std::string& name) const {
+    auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << "no column " << name;
+    return static_cast<std::size_t>(it - header.begin());
+  }
+  std::string at(std::size_t row, const std::string& name) const { return rows.at(row).at(column(name)); }
+};
+
+Csv read_csv(const fs::path& p) {
+  std::istringstream in(read_text(p));
+  Csv c;
+  std::string line;
+  if (std::getline(in, line)) c.header = csv_fields(line);
+  while (std::getline(in, line)) c.rows.push_back(csv_fields(line));
+  return c;
+}
+
+// The tiny study (12 runs of 60 spheres, ~0.2 s each) into `db`.
+void run_tiny(const fs::path& db) {
+  Store store(db);
+  RunnerOptions o;
+  o.workers = 2;
+  const RunnerSummary s = run_jobs(expand_jobs(load_study(source_path("studies/examples/tiny.toml"))), store, o);
+  ASSERT_EQ(s.done_now, 12);
+  ASSERT_TRUE(s.failed.empty());
+}
+
+// A stored run built by hand: J_paper = j (J_flowing, J_mid proportional), or
+// no J at all when `clogged` (the run never passed every particle).
+RunRecord synthetic_run(const std::string& model, double j, double distance_mm, int replicate, bool clogged = false) {
+  RunRecord r;
+  r.model = model;
+  r.scenario_name = "synthetic";
+  r.replicate = replicate;
+  r.diameter_m = 0.00775, r.gap_m = 0.033, r.distance_m = distance_mm * 1e-3, r.incline_rad = 0.1396;
+  r.particles = 100;
+  r.passed = clogged ? 40 : 100;
+  r.sim_time_s = clogged ? 30 : 100 / j;
+  r.wall_time_s = 0.25;
+  r.end_reason = clogged ? EndReason::permanent_clog : EndReason::all_passed;
+  r.regime = clogged ? Regime::clogged : Regime::continuous;
+  if (!clogged) r.j_paper = j, r.j_flowing = 1.1 * j, r.j_mid = 1.05 * j;
+  return r;
+}
+
+class SyntheticStore {
+ public:
+  explicit SyntheticStore(const fs::path& db) : store_(db) {}
+  // `values` replicates of one point; axes_json built from the distance when
+  // given.
+  void add_point(const std::string& series, const std::string& model, int point, std::optional<double> distance_mm,
+                 const std::vector<double>& values, bool clogged = false) {
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      JobIdentity id;
+      id.key = fmt::format("{:016x}", ++counter_);
+      id.study = "synthetic";
+      id.series = series;
+      id.point = point;
+      id.model = model;
+      id.replicate = static_cast<int>(i);
+      id.point_label = distance_mm ? fmt::format("obstruction.distance_mm={}", *distance_mm) : "";
+      id.axes_json = distance_mm ? fmt::format("{{\"obstruction.distance_mm\":{}}}", *distance_mm) : "{}";
+      store_.put(id, synthetic_run(model, values[i], distance_mm.value_or(0), id.replicate, clogged));
+    }
+  }
+  std::vector<StoredRun> load() const { return store_.load(); }
+
+ private:
+  Store store_;
+  int counter_ = 0;
+};
+
+// Six replicates around `mean` (sd ~ 0.19): a small, fixed scatter so bootstrap
+// intervals are tight.
+std::vector<double> around(double mean) {
+  return {mean - 0.25, mean - 0.15, mean - 0.05, mean + 0.05, mean + 0.15, mean + 0.25};
+}
+
+constexpr double kDiameterMm = 7.75;
+
+}  // namespace
+
+// ------------------------------------------------------------------ the tiny
+// study end to end
+
+class ReportTiny : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    run_tiny(dir / "runs.sqlite");
+    request.results = dir.path();  // the folder: the report finds runs.sqlite in it
+    request.study = source_path("studies/examples/tiny.toml");
+    request.out = dir / "report";
+  }
+  ReportOutcome make(bool plots = true) {
+    request.plots = plots;
+    std::ostringstream out, log;
+    ReportOutcome o = make_report(request, out, log);
+    stdout_text = out.str();
+    log_text = log.str();
+    return o;
+  }
+
+  TempDir dir;
+  ReportRequest request;
+  std::string stdout_text, log_text;
+};
+
+TEST_F(ReportTiny, PointsCsvHasOneRowPerPointWithEveryColumn) {
+  const ReportOutcome o = make(false);
+  EXPECT_EQ(o.n_runs, 12u);
+  const Csv csv = read_csv(o.points_csv);
+  ASSERT_EQ(csv.rows.size(), 6u) << "2 series x 3 points x 1 model";
+  for (const char* name : {"series",
+                           "model",
+                           "point_label",
+                           "bottleneck.gap_mm",
+                           "plane.incline_deg",
+                           "W_over_d",
+                           "D_over_d",
+                           "d_mm",
+                           "n_runs",
+                           "all_passed_fraction",
+                           "J_paper_mean",
+                           "J_paper_t_lo",
+                           "J_paper_t_hi",
+                           "J_paper_boot_lo",
+                           "J_paper_boot_hi",
+                           "J_paper_median",
+                           "J_paper_clipped_mean",
+                           "J_paper_n_dropped",
+                           "J_paper_star_mean",
+                           "J_flowing_mean",
+                           "J_flowing_star_mean",
+                           "J_mid_mean",
+                           "J_mid_boot_hi",
+                           "aval_mean",
+                           "aval_lo",
+                           "aval_hi",
+                           "aval_n",
+                           "aval_tail_p",
+                           "clog_n",
+                           "clog_mean_s",
+                           "clog_median_s",
+                           "clog_censored_fraction",
+                           "regime_continuous",
+                           "regime_intermittent",
+                           "regime_clogged",
+                           "regime_label",
+                           "decomp_tau_s",
+                           "decomp_j_total",
+                           "mean_wall_time_s"})
+    csv.column(name);
+  EXPECT_EQ(std::count(csv.header.begin(), csv.header.end(), "verdict"), 0) << "no baseline in tiny.toml";
+  for (const auto& row : csv.rows) EXPECT_EQ(row.size(), csv.header.size());
+  // Study file order, points in order; the axis value as the study wrote it.
+  EXPECT_EQ(csv.at(0, "series"), "gap");
+  EXPECT_EQ(csv.at(0, "bottleneck.gap_mm"), "19.4");
+  EXPECT_EQ(csv.at(2, "bottleneck.gap_mm"), "38.75");
+  EXPECT_EQ(csv.at(0, "plane.incline_deg"), "");
+  EXPECT_EQ(csv.at(3, "series"), "incline");
+  EXPECT_EQ(csv.at(3, "plane.incline_deg"), "6");
+  EXPECT_NEAR(std::stod(csv.at(0, "W_over_d")), 19.4 / 7.75, 1e-9);
+  EXPECT_NEAR(std::stod(csv.at(0, "d_mm")), 7.75, 1e-9);
+  for (std::size_t r = 0; r < 6; ++r) EXPECT_EQ(csv.at(r, "n_runs"), "2") << r;
+  // The tables went to stdout too.
+  EXPECT_NE(stdout_text.find("series 'incline', model 2d"), std::string::npos) << stdout_text;
+}
+
+TEST_F(ReportTiny, MarkdownNamesTheStudyAndTheRegenerateCommand) {
+  const ReportOutcome o = make(false);
+  ASSERT_TRUE(fs::exists(o.markdown));
+  const std::string md = read_text(o.markdown);
+  EXPECT_NE(md.find("Study report: tiny"), std::string::npos) << md;
+  EXPECT_NE(md.find("60 spheres, a gap sweep and an incline sweep"), std::string::npos) << "the description";
+  EXPECT_NE(md.find("- runs: 12 in 6 points"), std::string::npos) << md;
+  const std::string command = fmt::format("gapflow report {} --study {} --out {} --no-plots", dir.path().string(),
+                                          request.study->string(), request.out->string());
+  EXPECT_NE(md.find(command), std::string::npos) << "expected: " << command << "\n" << md;
+  EXPECT_NE(md.find("| bottleneck.gap_mm=19.4 | 2.5 |"), std::string::npos) << "the point tables in Markdown:\n" << md;
+  EXPECT_NE(md.find(code_version()), std::string::npos);
+}
+
+TEST_F(ReportTiny, PlotsAreWrittenWhenMatplotlibIsThere) {
+  if (!find_python_with_matplotlib()) GTEST_SKIP() << "no python3 with matplotlib";
+  const ReportOutcome o = make(true);
+  EXPECT_EQ(o.plot_warning, "") << log_text;
+  // tiny's runs clog at most once: no completed avalanche after the first, so
+  // no clogging plot (ReportClogging draws one from runs built by hand).
+  EXPECT_FALSE(fs::exists(*request.out / "clogging.png"));
+  for (const char* png : {"j_star_vs_W_over_d.png", "j_star_vs_plane_incline_deg.png"}) {
+    const fs::path p = *request.out / png;
+    ASSERT_TRUE(fs::exists(p)) << p;
+    EXPECT_EQ(read_text(p).substr(1, 3), "PNG") << p;
+    EXPECT_NE(read_text(o.markdown).find(std::string("(") + png + ")"), std::string::npos) << "embedded " << png;
+  }
+}
+
+TEST(ReportPlots, ScriptDrawsMissingValuesAndAsymmetricBars) {
+  const auto python = find_python_with_matplotlib();
+  if (!python) GTEST_SKIP() << "no python3 with matplotlib";
+  TempDir dir;
+  PlotFigure f{"odd.png", "t", "x", "y", {}, {{"ref", "2d", 1.0, 0.8, kNaN}}, true};
+  f.lines.push_back({"a", "2d", "errorbar", {1, 2, 3}, {1, kNaN, 2}, {0.5, kNaN, 1.9}, {1.5, 3, kNaN}, {}, {}, ""});
+  f.lines.push_back({"b", "3d", "markers", {1}, {2}, {}, {}, {0.5}, {1.5}, ""});
+  f.lines.push_back({"b fit", "3d", "curve_fixed", {1, 2}, {2, 3}, {}, {}, {}, {}, "b"});
+  write_text(dir / "plots.json", plot_spec_json({f}));
+  const int rc = run_program({*python, plot_script_path().string(), (dir / "plots.json").string(), dir.path().string()},
+                             dir / "log.txt");
+  EXPECT_EQ(rc, 0) << read_text(dir / "log.txt");
+  EXPECT_TRUE(fs::exists(dir / "odd.png"));
+  EXPECT_NE(read_text(dir / "plots.json").find("null"), std::string::npos) << "NaN is written as null";
+}
+
+TEST_F(ReportTiny, EveryAnalysisKindRunsOnRealDataWithoutCrashing) {
+  const std::string study = read_text(*request.study);
+  for (const char* kind : {"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"}) {
+    const fs::path file = dir / fmt::format("tiny_{}.toml", kind);
+    write_text(file, study + fmt::format("\n[report]\nkind = \"{}\"\nbaseline "
+                                         "= \"incline\"\nj = \"flowing\"\n",
+                                         kind));
+    request.study = file;
+    const ReportOutcome o = make(false);
+    const std::string md = read_text(o.markdown);
+    EXPECT_NE(md.find("## Analysis: "), std::string::npos) << kind;
+    EXPECT_NE(md.find("analyses: " + std::string(kind)), std::string::npos) << kind;
+    // The incline series (3 points, W/d = 2.71) is a baseline no gap point
+    // matches in W/d: no ratios, but the columns are there and nothing breaks.
+    const Csv csv = read_csv(o.points_csv);
+    EXPECT_EQ(csv.at(0, "baseline"), "") << kind;
+    EXPECT_EQ(csv.at(3, "verdict"), "") << "the baseline is not compared to itself";
+  }
+}
+
+// ------------------------------------------------------------------
+// flow_vs_distance on known data
+
+TEST(ReportFlowVsDistance, FindsThePeakAndTheSignificantRanges) {
+  TempDir dir;
+  {
+    SyntheticStore s(dir / "runs.sqlite");
+    s.add_point("none", "2d", 0, std::nullopt, around(10.0));
+    // J/J_0 by distance: 1.0, 1.2, 1.5, 1.2, 1.0, 0.8, 1.0, 1.2, then a point
+    // where nothing passed.
+    const std::vector<double> gain{1.0, 1.2, 1.5, 1.2, 1.0, 0.8, 1.0, 1.2};
+    for (std::size_t i = 0; i < gain.size(); ++i)
+      s.add_point("cylinder", "2d", static_cast<int>(i), 10.0 * (i + 1), around(10.0 * gain[i]));
+    s.add_point("cylinder", "2d", 8, 90.0, {1, 1, 1}, /*clogged=*/true);
+  }
+  const fs::path study = dir / "study.toml";
+  write_text(study,
+             "[study]\nname = \"synthetic\"\n[[series]]\nlabel = "
+             "\"none\"\nscenario = \"x.toml\"\n"
+             "[[series]]\nlabel = \"cylinder\"\nscenario = \"x.toml\"\n"
+             "[report]\nkind = \"flow_vs_distance\"\nbaseline = \"none\"\n");
+  const StudyInfo info = read_study_info(study);
+  ASSERT_EQ(info.report.kinds, std::vector<ReportKind>{ReportKind::flow_vs_distance});
+  const ReportData data = collect_report_data(Store(dir / "runs.sqlite").load(), info);
+  const FlowVsDistanceAnalysis a = analyze_flow_vs_distance(data, info.report);
+  ASSERT_TRUE(a.baseline_found);
+  ASSERT_EQ(a.results.size(), 1u);
+  const DistanceResult& r = a.results[0];
+  EXPECT_EQ(r.n_points, 9u);
+  EXPECT_EQ(r.n_compared, 8u) << "the clogged point has no J_paper";
+  EXPECT_NEAR(r.peak_d_over_d, 30.0 / kDiameterMm, 1e-9);
+  EXPECT_NEAR(r.peak.mean, 15.0, 1e-9);
+  EXPECT_NEAR(r.baseline.mean, 10.0, 1e-9);
+  ASSERT_TRUE(r.peak_gain);
+  EXPECT_NEAR(r.peak_gain->ratio, 1.5, 1e-9);
+  EXPECT_TRUE(r.peak_gain->ratio_ci.contains(1.5));
+  EXPECT_GT(r.peak_gain->ratio_ci.lo, 1.4);
+  EXPECT_EQ(r.peak_gain->verdict, Verdict::significantly_above);
+  ASSERT_EQ(r.above.size(), 2u) << "two separate ranges";
+  EXPECT_NEAR(r.above[0].from, 20.0 / kDiameterMm, 1e-9);
+  EXPECT_NEAR(r.above[0].to, 40.0 / kDiameterMm, 1e-9);
+  EXPECT_EQ(r.above[0].n_points, 3u);
+  EXPECT_NEAR(r.above[1].from, 80.0 / kDiameterMm, 1e-9);
+  EXPECT_EQ(r.above[1].n_points, 1u);
+  ASSERT_EQ(r.below.size(), 1u);
+  EXPECT_NEAR(r.below[0].from, 60.0 / kDiameterMm, 1e-9);
+  EXPECT_EQ(r.below[0].n_points, 1u);
+
+  // The whole report on the same store: ratios in points.csv, n/a for the
+  // clogged point, the section.
+  std::ostringstream out, log;
+  ReportRequest req;
+  req.results = dir / "runs.sqlite";
+  req.study = study;
+  req.plots = false;
+  const ReportOutcome o = make_report(req, out, log);
+  const Csv csv = read_csv(o.points_csv);
+  ASSERT_EQ(csv.rows.size(), 10u);
+  EXPECT_EQ(csv.at(0, "series"), "none") << "study file order";
+  EXPECT_EQ(csv.at(3, "verdict"), "significantly above");
+  EXPECT_NEAR(std::stod(csv.at(3, "ratio")), 1.5, 1e-9);
+  EXPECT_EQ(csv.at(6, "verdict"), "significantly below");
+  EXPECT_EQ(csv.at(9, "J_paper_mean"), "") << "undefined, not 0";
+  EXPECT_EQ(csv.at(9, "verdict"), "insufficient data");
+  const std::string md = read_text(o.markdown);
+  EXPECT_NE(md.find("## Analysis: Flow rate against the obstruction distance"), std::string::npos) << md;
+  EXPECT_NE(md.find("J_paper is significantly above J_0 at D/d = 2.58-5.16, "
+                    "10.3, and significantly below J_0 at D/d = 7.74"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(out.str().find("n/a"), std::string::npos) << "the clogged point prints n/a";
+}
+
+// ------------------------------------------------------------------ models
+
+TEST(ReportModels, IdenticalRecordsGiveRatioOneAndPerfectAgreement) {
+  TempDir dir;
+  {
+    SyntheticStore s(dir / "runs.sqlite");
+    for (int p = 0; p < 4; ++p)
+      for (const char* model : {"2d", "3d"}) s.add_point("cyl", model, p, 10.0 * (p + 1), around(8.0 + 3 * p * p));
+  }
+  StudyInfo info;
+  info.report.kinds = {ReportKind::models};
+  const ReportData data = collect_report_data(Store(dir / "runs.sqlite").load(), info);
+  const ModelsAnalysis a = analyze_models(data, info.report);
+  ASSERT_EQ(a.pairs.size(), 4u);
+  for (const ModelPair& m : a.pairs) {
+    EXPECT_DOUBLE_EQ(m.ratio.ratio, 1.0) << m.point_label;
+    EXPECT_TRUE(m.ratio.ratio_ci.contains(1.0)) << m.point_label;
+    EXPECT_EQ(m.ratio.verdict, Verdict::not_distinguishable);
+    EXPECT_DOUBLE_EQ(m.j2d_star.mean, m.j3d_star.mean);
+  }
+  EXPECT_EQ(a.n_both, 4u);
+  EXPECT_DOUBLE_EQ(a.mean_ratio, 1.0);
+  EXPECT_NEAR(a.pearson, 1.0, 1e-12);
+  EXPECT_NEAR(a.spearman, 1.0, 1e-12);
+  const ExperimentSection s = models_section(data, info.report);
+  ASSERT_EQ(s.figures.size(), 1u);
+  EXPECT_TRUE(s.figures[0].identity_line);
+  ASSERT_EQ(s.figures[0].lines.size(), 1u);
+  EXPECT_EQ(s.figures[0].lines[0].x, s.figures[0].lines[0].y);
+}
+
+// ------------------------------------------------------------------ clogging
+
+// Runs whose avalanches after the first all have size s = 2^k - 1 at W/d =
+// sqrt(k): then ln(<s>+1) = ln 2 (W/d)^2 exactly (censoring-aware mean of equal
+// completed sizes = s).
+TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
+  std::vector<StoredRun> runs;
+  for (int k = 1; k <= 4; ++k)
+    for (int rep = 0; rep < 2; ++rep) {
+      StoredRun r;
+      r.id.key = fmt::format("{:016x}", 100 * k + rep);
+      r.id.study = "clog", r.id.series = "small", r.id.model = "2d", r.id.point = k - 1, r.id.replicate = rep;
+      r.id.point_label = fmt::format("bottleneck.gap_mm={}", k);
+      r.id.axes_json = fmt::format("{{\"bottleneck.gap_mm\":{}}}", k);
+      r.record = synthetic_run("2d", 10.0, 0.0, rep, /*clogged=*/true);
+      r.record.gap_m = std::sqrt(static_cast<double>(k)) * r.record.diameter_m;
+      const int s = (1 << k) - 1;
+      r.record.avalanches.push_back({7, 0.0, 1.0, true, false});  // the first: excluded
+      for (int i = 0; i < 10; ++i) r.record.avalanches.push_back({s, 2.0 + i, 2.5 + i, false, false});
+      r.record.clogs.push_back({1.0, 30.0, true});
+      runs.push_back(std::move(r));
+    }
+  StudyInfo info;
+  info.report.kinds = {ReportKind::clogging};
+  const ReportData data = collect_report_data(runs, info);
+  const CloggingAnalysis a = analyze_clogging(data);
+  ASSERT_EQ(a.series.size(), 1u);
+  const ClogSeries& cs = a.series[0];
+  ASSERT_EQ(cs.points.size(), 4u);
+  EXPECT_NEAR(cs.points[2].w2, 3.0, 1e-9);
+  EXPECT_NEAR(cs.points[2].ln_s1, 3 * std::log(2.0), 1e-9);
+  EXPECT_LT(cs.points[2].ln_lo, cs.points[2].ln_s1);
+  ASSERT_TRUE(cs.fit.ok);
+  EXPECT_EQ(cs.fit.weighting, "interval widths");
+  EXPECT_NEAR(cs.fit.slope, std::log(2.0), 1e-9);
+  EXPECT_NEAR(cs.fit.intercept, 0.0, 1e-9);
+  // The generic clogging figure exists (avalanche data) and the section draws
+  // the fit onto it.
+  const auto figures = generic_figures(data, JKind::paper);
+  EXPECT_TRUE(
+      std::any_of(figures.begin(), figures.end(), [](const PlotFigure& f) { return f.file == "clogging.png"; }));
+  const ExperimentSection sec = clogging_section(data, info.report);
+  ASSERT_EQ(sec.overlays.count("clogging.png"), 1u);
+  EXPECT_EQ(sec.overlays.at("clogging.png").at(0).x.size(), 2u);
+  EXPECT_NE(render_markdown(sec.tables.at(1)).find("| small | 2D | 0.6931"), std::string::npos)
+      << render_markdown(sec.tables.at(1));
+  // No J_paper anywhere (every run clogged): the tables say n/a and the J*
+  // figure has no line.
+  EXPECT_NE(render_text(point_tables(data, JKind::paper).at(0)).find("n/a"), std::string::npos);
+}
+
+// ------------------------------------------------------------------ pieces
+
+TEST(ReportPieces, LineFitRecoversAnExactLineAndRefusesOneX) {
+  const LineFit f = fit_line({1, 2, 3, 4}, {5, 8, 11, 14}, {0.1, 0.1, 0.2, 0.1});
+  ASSERT_TRUE(f.ok);
+  EXPECT_NEAR(f.slope, 3.0, 1e-12);
+  EXPECT_NEAR(f.intercept, 2.0, 1e-12);
+  EXPECT_TRUE(f.slope_ci.contains(3.0));
+  EXPECT_EQ(f.weighting, "interval widths");
+  // Noisy: the interval widens with the scatter.
+  const LineFit g = fit_line({1, 2, 3, 4, 5}, {1.1, 1.9, 3.2, 3.8, 5.1});
+  EXPECT_EQ(g.weighting, "unweighted");
+  EXPECT_TRUE(g.slope_ci.contains(g.slope));
+  EXPECT_GT(g.slope_ci.width(), 0.05);
+  EXPECT_FALSE(fit_line({2, 2, 2}, {1, 2, 3}).ok);
+  EXPECT_FALSE(fit_line({}, {}).ok);
+}
+
+TEST(ReportPieces, SpearmanUsesRanksWithTies) {
+  EXPECT_NEAR(spearman_correlation({1, 2, 3, 4}, {10, 20, 30, 1000}), 1.0, 1e-12);
+  EXPECT_NEAR(spearman_correlation({1, 2, 3, 4}, {4, 3, 2, 1}), -1.0, 1e-12);
+  EXPECT_NEAR(spearman_correlation({1, 2, 2, 3}, {1, 2, 2, 3}), 1.0, 1e-12);
+  EXPECT_TRUE(std::isnan(spearman_correlation({1}, {1})));
+}
+
+TEST(ReportPieces, AxesJsonKeepsOrderTextAndNumbers) {
+  const auto a = parse_axes_json(R"({"obstruction.distance_mm":90.0,"obstruction.shape":"cylinder","x":true})");
+  ASSERT_EQ(a.size(), 3u);
+  EXPECT_EQ(a[0].key, "obstruction.distance_mm");
+  EXPECT_EQ(a[0].text, "90.0");
+  EXPECT_EQ(a[0].number, 90.0);
+  EXPECT_EQ(a[1].text, "cylinder");
+  EXPECT_TRUE(std::isnan(a[1].number));
+  EXPECT_EQ(a[2].text, "true");
+  EXPECT_TRUE(parse_axes_json("{}").empty());
+  EXPECT_THROW(parse_axes_json("{\"a\":}"), std::runtime_error);
+}
+
+TEST(ReportPieces, ReportTableIsReadStrictlyWithItsLine) {
+  const StudyInfo ok = parse_study_info(
+      "[study]\nname = \"s\"\nreplicates = 3\nmodels = [\"2d\", "
+      "\"3d\"]\n[report]\nkind = \"clogging\"\nj = \"mid\"\n",
+      "s.toml");
+  EXPECT_EQ(ok.name, "s");
+  EXPECT_EQ(ok.replicates, 3);
+  EXPECT_EQ(ok.models, (std::vector<std::string>{"2d", "3d"}));
+  EXPECT_EQ(ok.report.kinds, std::vector<ReportKind>{ReportKind::clogging});
+  const StudyInfo two = parse_study_info("[report]\nkind = [\"models\", \"flow_vs_gap\"]\nfit_w_min = 2\n", "s.toml");
+  EXPECT_EQ(two.report.kinds, (std::vector<ReportKind>{ReportKind::models, ReportKind::flow_vs_gap}));
+  EXPECT_EQ(two.report.fit_w_min, 2.0);
+  EXPECT_EQ(ok.report.j, JKind::mid);
+  try {
+    parse_study_info(
+        "[study]\nname = \"s\"\n[report]\nkind = "
+        "\"clogging\"\nbasline = \"none\"\n",
+        "s.toml");
+    ADD_FAILURE() << "no error for a misspelt key";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.key(), "report.basline");
+    EXPECT_EQ(e.where().line, 5);
+  }
+  try {
+    parse_study_info("[report]\nkind = \"flow_vs_gaps\"\n", "s.toml");
+    ADD_FAILURE() << "no error for a bad kind";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.key(), "report.kind");
+    EXPECT_NE(std::string(e.what()).find("flow_vs_gap"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ReportPieces, MissingStoreIsBadInputAndNothingIsCreated) {
+  TempDir dir;
+  ReportRequest r;
+  r.results = dir / "nothing" / "runs.sqlite";
+  std::ostringstream out, log;
+  EXPECT_THROW(make_report(r, out, log), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(dir / "nothing"));
+}
