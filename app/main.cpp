@@ -3,7 +3,9 @@
 //   gapflow check SCENARIO.toml [--set key=value]... [--print]
 //   gapflow study STUDY.toml [--quick] [--jobs N] [--db PATH] [--dry-run]
 //   gapflow export DB --table TABLE --csv OUT.csv
+//   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots]
 // Exit codes: 0 success, 2 bad input (scenario or command line), 1 failure while running.
+#include "app/cmd_report.hpp"
 #include "app/cmd_study.hpp"
 #include "app/models.hpp"
 #include "common/geometry.hpp"
@@ -184,6 +186,7 @@ int main(int argc, char** argv) {
   check->add_flag("--print", print, "Print the complete resolved scenario as canonical TOML");
 
   gapflow::StudyCommands study_commands(app);
+  gapflow::ReportCommand report_command(app);
 
   try {
     app.parse(argc, argv);
@@ -195,6 +198,7 @@ int main(int argc, char** argv) {
   }
 
   if (auto code = study_commands.run()) return *code;
+  if (auto code = report_command.run()) return *code;
   try {
     if (*run) return cmd_run(run_args, model, out_path, quiet, replicates, jobs);
     if (*check) return cmd_check(check_args, print);

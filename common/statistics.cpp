@@ -440,9 +440,14 @@ RatioComparison compare_ratio_of_means(const std::vector<double>& a, const std::
   }
   r.ratio_ci = percentile_interval(std::move(ratios), opt.level);
   if (!r.ratio_ci.valid()) return r;
-  r.verdict = r.ratio_ci.lo > 1.0   ? Verdict::significantly_above
-              : r.ratio_ci.hi < 1.0 ? Verdict::significantly_below
-                                    : Verdict::not_distinguishable;
+  // Both must agree: the percentile bootstrap of a ratio is too narrow for a few
+  // runs (3 replicates gave "above" next to a Welch p of 0.12), so a verdict also
+  // needs the Welch test at the same level.
+  const bool welch_significant = r.welch.p_two_sided < 1.0 - opt.level;
+  r.verdict = !welch_significant       ? Verdict::not_distinguishable
+              : r.ratio_ci.lo > 1.0   ? Verdict::significantly_above
+              : r.ratio_ci.hi < 1.0   ? Verdict::significantly_below
+                                      : Verdict::not_distinguishable;
   return r;
 }
 

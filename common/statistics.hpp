@@ -206,8 +206,9 @@ const char* to_string(Verdict v);
 // ratio = mean(a)/mean(b) with a plain percentile bootstrap interval (a and b resampled
 // independently; `expanded` is not applied: there is no standard two-sample form, so for
 // small samples the interval is slightly too narrow -- the Welch p-value is the cross-check).
-// The verdict comes from the interval: lo > 1 above, hi < 1 below, else not distinguishable;
-// insufficient data with fewer than 2 values on either side.
+// The verdict needs the interval AND the Welch test: lo > 1 above, hi < 1 below, each only
+// when Welch's p < 1 - level; else not distinguishable; insufficient data with fewer than
+// 2 values on either side.
 struct RatioComparison {
   std::size_t n_a = 0, n_b = 0;
   double mean_a = kNaN, mean_b = kNaN;

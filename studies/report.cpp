@@ -1,5 +1,4 @@
-// Report: the [report] options, grouping stored runs into points, and
-// make_report().
+// Report: the [report] options, grouping stored runs into points, and make_report().
 #include "studies/report.hpp"
 
 #include "common/scenario_loader.hpp"
@@ -109,8 +108,7 @@ ReportOptions read_report_table(const toml::table& t, const std::string& source)
   return o;
 }
 
-// [study] keys the report shows; anything malformed is left to the study
-// loader.
+// [study] keys the report shows; anything malformed is left to the study loader.
 void read_study_table(const toml::table& t, StudyInfo& info) {
   info.name = t["name"].value_or(std::string());
   info.description = t["description"].value_or(std::string());
@@ -336,8 +334,7 @@ const ReportPoint* baseline_for(const ReportData& data, const ReportPoint& p) {
   for (const ReportPoint& b : data.points)
     if (is_baseline(data, b) && b.model == p.model) same_model.push_back(&b);
   if (same_model.size() == 1) return same_model.front();
-  // Several reference points (e.g. a baseline swept over the gap): the one with
-  // the same W/d.
+  // Several reference points (e.g. a baseline swept over the gap): the one with the same W/d.
   for (const ReportPoint* b : same_model)
     if (std::abs(b->stats.w_over_d - p.stats.w_over_d) <= 1e-9 * std::max(1.0, std::abs(p.stats.w_over_d))) return b;
   return nullptr;

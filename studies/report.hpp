@@ -1,28 +1,24 @@
 // The study report: from a results store (and optionally its study file) to
-//   points.csv   one row per (series, model, point), every statistic side by
-//   side stdout       the same as human-readable tables, per series and model
-//   *.png        plots, drawn by studies/plot_study.py from a JSON spec
-//   (plots.json) report.md    what was run, the tables, the plots and the
-//   experiment analysis
+//   points.csv   one row per (series, model, point), every statistic side by side
+//   stdout       the same as human-readable tables, per series and model
+//   *.png        plots, drawn by studies/plot_study.py from a JSON spec (plots.json)
+//   report.md    what was run, the tables, the plots and the experiment analyses
 //
-// Every number comes from the store; the C++ side decides what to draw and the
-// Python script only draws it, so the logic is tested here and the script stays
-// dumb.
+// Every number comes from the store; the C++ side decides what to draw and the Python
+// script only draws it, so the logic is tested here and the script stays dumb.
 //
-// The study file's optional [report] table chooses the experiment analyses (the
-// same schema as the study loader's ReportDef, studies/study.hpp):
+// The study file's optional [report] table chooses the experiment analyses (the same
+// schema as the study loader's ReportDef, studies/study.hpp):
 //   [report]
-//   kind = "flow_vs_distance"  # or a list; flow_vs_gap, flow_vs_distance,
-//   clogging, models,
-//                              # screen_confirm; none: the generic outputs only
-//   baseline = "none"          # series label of the reference (J ratio +
-//   verdict per point) j = "paper" | "flowing" | "mid"      # the flow rate the
-//   analyses use (default paper) fit_w_min = 2.0            # flow_vs_gap: W/d
-//   range of the Beverloo fits (inclusive) fit_w_max = 12.0
+//   kind = "flow_vs_distance"  # or a list of: flow_vs_gap, flow_vs_distance, clogging,
+//                              # models, screen_confirm; absent: the generic outputs only
+//   baseline = "none"          # series label of the reference (J ratio + verdict per point)
+//   j = "paper"                # "paper" | "flowing" | "mid": the J the analyses use
+//   fit_w_min = 2.0            # flow_vs_gap: W/d range of the Beverloo fits (inclusive)
+//   fit_w_max = 12.0
 // Files: report.cpp (options, collection), report_tables.cpp (tables, CSV),
-// report_experiments.cpp (the analyses), report_sections.cpp (their text,
-// tables, plots), report_plots.cpp (plot spec, python), report_output.cpp
-// (report.md, make_report).
+// report_experiments.cpp (the analyses), report_sections.cpp (their text, tables, plots),
+// report_plots.cpp (plot spec, running Python), report_output.cpp (report.md, make_report).
 #pragma once
 
 #include "common/fits.hpp"
@@ -40,8 +36,7 @@
 
 namespace gapflow {
 
-// ---------------------------------------------------------------- options and
-// study info
+// ---------------------------------------------------------------- options and study info
 
 enum class ReportKind { flow_vs_gap, flow_vs_distance, clogging, models, screen_confirm };
 const char* to_string(ReportKind k);
@@ -75,8 +70,7 @@ struct AxisEntry {
   std::string text;      // the value as stored in axes_json (strings without quotes)
   double number = kNaN;  // NaN unless numeric
 };
-// The flat JSON object of JobIdentity::axes_json, in its order. Throws
-// std::runtime_error if malformed.
+// The flat JSON object of JobIdentity::axes_json, in its order. Throws std::runtime_error if malformed.
 std::vector<AxisEntry> parse_axes_json(std::string_view json);
 
 struct ReportPoint {
@@ -86,8 +80,7 @@ struct ReportPoint {
   std::vector<AxisEntry> axes;
   double d_mm = kNaN;  // nominal diameter of the first run
   PointStatistics stats;
-  // Against the baseline series (when one is defined and matches; see
-  // baseline_for).
+  // Against the baseline series (when one is defined and matches; see baseline_for).
   std::optional<RatioComparison> vs_baseline;
   std::string baseline_label;  // "<series> <point label>" of the reference point
 
@@ -110,8 +103,7 @@ struct ReportData {
 ReportData collect_report_data(const std::vector<StoredRun>& runs, StudyInfo info, const AnalysisOptions& opt = {});
 
 // The reference point of `p`: the baseline series' point in the same model with
-// the same W/d (the only one, when the baseline series has one point per
-// model). nullptr if none.
+// the same W/d (the only one, when the baseline series has one point per model). nullptr if none.
 const ReportPoint* baseline_for(const ReportData& data, const ReportPoint& p);
 bool is_baseline(const ReportData& data, const ReportPoint& p);
 
@@ -119,8 +111,7 @@ bool is_baseline(const ReportData& data, const ReportPoint& p);
 const SampleStatistics& j_stats(const PointStatistics& s, JKind k);
 const std::vector<double>& j_values(const PointStatistics& s, JKind k);
 
-// A mean with its Student-t 95 % interval; NaN where undefined (n = 0: all; n =
-// 1: the interval).
+// A mean with its Student-t 95 % interval; NaN where undefined (n = 0: all; n = 1: the interval).
 struct MeanCI {
   std::size_t n = 0;
   double mean = kNaN, lo = kNaN, hi = kNaN;
@@ -130,8 +121,7 @@ MeanCI mean_ci(const Summary& s);
 MeanCI j_star(const PointStatistics& s, JKind k);  // J* = J sqrt(d/g)
 
 // What a series is plotted against: W/d for gap sweeps, D/d for distance
-// sweeps, else the raw first numeric axis ("" when the series has no numeric
-// axis).
+// sweeps, else the raw first numeric axis ("" when the series has no numeric axis).
 struct XAxis {
   std::string name;  // "W/d", "D/d" or the dotted key
   std::string key;   // the swept key it comes from
@@ -145,8 +135,7 @@ std::vector<const ReportPoint*> points_of(const ReportData& data, const std::str
 // (series, model) pairs in report order.
 std::vector<std::pair<std::string, std::string>> series_models(const ReportData& data);
 
-// ---------------------------------------------------------------- tables and
-// formatting
+// ---------------------------------------------------------------- tables and formatting
 
 struct TextTable {
   std::string title;
@@ -198,19 +187,16 @@ std::string plot_spec_json(const std::vector<PlotFigure>& figures);
 std::vector<PlotFigure> generic_figures(const ReportData& data, JKind j);
 std::string j_star_figure_file(const std::string& x_name);
 
-// A Python 3 interpreter with matplotlib: $GAPFLOW_PYTHON, python3 on PATH,
-// /usr/bin/python3.
+// A Python 3 interpreter with matplotlib: $GAPFLOW_PYTHON, python3 on PATH, /usr/bin/python3.
 std::optional<std::string> find_python_with_matplotlib();
 // Path of studies/plot_study.py ($GAPFLOW_PLOT_SCRIPT overrides).
 std::filesystem::path plot_script_path();
 // Run a program (no shell); its exit code, or -1 when it could not be started.
 int run_program(const std::vector<std::string>& argv, const std::filesystem::path& log);
 
-// ---------------------------------------------------------------- experiment
-// analyses
+// ---------------------------------------------------------------- experiment analyses
 
-// flow_vs_gap: J* = C (W/d - k)^beta per series and model, free beta and beta =
-// 3/2.
+// flow_vs_gap: J* = C (W/d - k)^beta per series and model, free beta and beta = 3/2.
 struct GapFit {
   std::string series, model;
   BeverlooFit free_beta, fixed_beta;
@@ -221,8 +207,7 @@ struct FlowVsGapAnalysis {
 };
 FlowVsGapAnalysis analyze_flow_vs_gap(const ReportData& data, const ReportOptions& opt);
 
-// flow_vs_distance: peak and significant ranges against the baseline, per
-// series and model.
+// flow_vs_distance: peak and significant ranges against the baseline, per series and model.
 struct DistanceRange {
   double from = kNaN,
          to = kNaN;  // D/d of the first and last point of a contiguous run
@@ -256,9 +241,9 @@ struct LineFit {
   double chi2_per_dof = kNaN;       // weighted: chi^2/dof; unweighted: residual variance
   std::string weighting;            // "interval widths" or "unweighted"
 };
-// Least squares of y on x; weighted by 1/se^2 when every se > 0 (intervals
-// scaled by max(1, chi^2/dof), as fit_beverloo), else unweighted. The line
-// needs 2 distinct x, the intervals 3 points.
+// Least squares of y on x; weighted by 1/se^2 when every se > 0 (intervals scaled by
+// max(1, chi^2/dof), as fit_beverloo), else unweighted. The line needs 2 distinct x, the
+// intervals 3 points.
 LineFit fit_line(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& se = {});
 
 struct ClogPoint {
@@ -310,14 +295,12 @@ ExperimentSection flow_vs_gap_section(const ReportData& data, const ReportOption
 ExperimentSection flow_vs_distance_section(const ReportData& data, const ReportOptions& opt);
 ExperimentSection clogging_section(const ReportData& data, const ReportOptions& opt);
 ExperimentSection models_section(const ReportData& data, const ReportOptions& opt);
-// screen_confirm: the models comparison read as "did the 3D confirmation keep
-// the 2D screen's ranking".
+// screen_confirm: the models comparison read as "did the 3D confirmation keep the 2D screen's ranking".
 ExperimentSection screen_confirm_section(const ReportData& data, const ReportOptions& opt);
 // One section per opt.kinds entry, in order.
 std::vector<ExperimentSection> experiment_sections(const ReportData& data, const ReportOptions& opt);
 
-// ---------------------------------------------------------------- the whole
-// report
+// ---------------------------------------------------------------- the whole report
 
 struct ReportRequest {
   std::filesystem::path results;               // runs.sqlite or its folder

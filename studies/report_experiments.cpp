@@ -1,5 +1,4 @@
-// The experiment analyses of the report (numbers only; report_sections.cpp
-// words them).
+// The experiment analyses of the report (numbers only; report_sections.cpp words them).
 #include "studies/report.hpp"
 
 #include <algorithm>
@@ -13,8 +12,7 @@ namespace gapflow {
 
 namespace {
 
-// Per-run J* of one point (runs where J is undefined are left out, as in
-// analyze_point).
+// Per-run J* of one point (runs where J is undefined are left out, as in analyze_point).
 std::vector<double> run_j_star(const ReportPoint& p, JKind j) {
   std::vector<double> v = j_values(p.stats, j);
   for (double& x : v) x *= p.stats.j_star_factor;
@@ -51,8 +49,7 @@ FlowVsGapAnalysis analyze_flow_vs_gap(const ReportData& data, const ReportOption
   return a;
 }
 
-// ----------------------------------------------------------------
-// flow_vs_distance
+// ---------------------------------------------------------------- flow_vs_distance
 
 namespace {
 
@@ -144,8 +141,7 @@ LineFit fit_line(const std::vector<double>& x, const std::vector<double>& y, con
   }
   const double dof = static_cast<double>(f.n - 2);
   f.chi2_per_dof = chi2 / dof;
-  // Weighted: trust the se unless the scatter says they are too small (as
-  // fit_beverloo does).
+  // Weighted: trust the se unless the scatter says they are too small (as fit_beverloo does).
   const double scale = weighted ? std::max(1.0, f.chi2_per_dof) : f.chi2_per_dof;
   const double t = student_t_quantile(0.975, dof);
   const double se_slope = std::sqrt(scale * s / delta), se_icpt = std::sqrt(scale * sxx / delta);

@@ -1,5 +1,4 @@
-// Report output: report.md and make_report(), which writes every file of a
-// report.
+// Report output: report.md and make_report(), which writes every file of a report.
 #include "studies/report.hpp"
 
 #include <fmt/format.h>
@@ -174,8 +173,7 @@ std::vector<PlotFigure> all_figures(const ReportData& data, const std::vector<Ex
   return figures;
 }
 
-// Draws the figures with plot_study.py; the PNGs written, or a warning saying
-// why none.
+// Draws the figures with plot_study.py; the PNGs written, or a warning saying why none.
 std::string draw(const std::vector<PlotFigure>& figures, const fs::path& dir, std::vector<std::string>& pngs) {
   if (figures.empty()) return "nothing to plot (no swept numeric axis, no avalanche data)";
   const auto python = find_python_with_matplotlib();

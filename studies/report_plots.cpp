@@ -38,8 +38,7 @@ std::string json_string(const std::string& s) {
   return out + "\"";
 }
 
-// JSON has no NaN: missing values are null (Python reads None and draws nothing
-// there).
+// JSON has no NaN: missing values are null (Python reads None and draws nothing there).
 std::string json_number(double v) { return std::isfinite(v) ? fmt::format("{}", v) : "null"; }
 
 std::string json_array(const std::vector<double>& v) {
@@ -85,8 +84,7 @@ std::string plot_spec_json(const std::vector<PlotFigure>& figures) {
   return "{\"figures\": " + list_json(figures, figure, "  ") + "}\n";
 }
 
-// ---------------------------------------------------------------- generic
-// figures
+// ---------------------------------------------------------------- generic figures
 
 std::string j_star_figure_file(const std::string& x_name) {
   std::string s = x_name == "W/d" ? "W_over_d" : x_name == "D/d" ? "D_over_d" : x_name;
@@ -182,8 +180,7 @@ std::vector<PlotFigure> generic_figures(const ReportData& data, JKind j) {
   return figures;
 }
 
-// ---------------------------------------------------------------- running
-// Python
+// ---------------------------------------------------------------- running Python
 
 int run_program(const std::vector<std::string>& argv, const std::filesystem::path& log) {
   std::vector<std::string> args = argv;
@@ -207,8 +204,7 @@ int run_program(const std::vector<std::string>& argv, const std::filesystem::pat
 std::optional<std::string> find_python_with_matplotlib() {
   std::vector<std::string> candidates;
   if (const char* env = std::getenv("GAPFLOW_PYTHON"); env && *env) candidates.push_back(env);
-  // A python3 first on PATH (pyenv, venv) may lack matplotlib while Debian's
-  // has it.
+  // A python3 first on PATH (pyenv, venv) may lack matplotlib while Debian's has it.
   candidates.insert(candidates.end(), {"python3", "/usr/bin/python3"});
   for (const std::string& c : candidates)
     if (run_program({c, "-c", "import matplotlib"}, {}) == 0) return c;

@@ -1,6 +1,5 @@
-// The experiment analyses as report sections: what was measured, the tables,
-// the plots. Every number is formatted from the analysis structs
-// (report_experiments.cpp).
+// The experiment analyses as report sections: what was measured, the tables, the plots.
+// Every number is formatted from the analysis structs (report_experiments.cpp).
 #include "studies/report.hpp"
 
 #include <fmt/format.h>
@@ -51,8 +50,7 @@ PlotLine beverloo_curve(const GapFit& g, const BeverlooFit& f, const char* style
   return l;
 }
 
-// "ok", the fit's own notes, or why there is no usable fit (drawn only when
-// ok).
+// "ok", the fit's own notes, or why there is no usable fit (drawn only when ok).
 std::string fit_note(const BeverlooFit& f) {
   std::string m = f.message;
   while (!m.empty() && (m.back() == ' ' || m.back() == ';')) m.pop_back();
@@ -106,8 +104,7 @@ ExperimentSection flow_vs_gap_section(const ReportData& data, const ReportOption
   return s;
 }
 
-// ----------------------------------------------------------------
-// flow_vs_distance
+// ---------------------------------------------------------------- flow_vs_distance
 
 namespace {
 
@@ -351,8 +348,7 @@ ExperimentSection models_section(const ReportData& data, const ReportOptions& op
   return s;
 }
 
-// ----------------------------------------------------------------
-// screen_confirm
+// ---------------------------------------------------------------- screen_confirm
 
 namespace {
 

@@ -1,5 +1,4 @@
-// Report tables: number formatting, text and Markdown rendering, the per-point
-// tables and points.csv.
+// Report tables: number formatting, text and Markdown rendering, the per-point tables and points.csv.
 #include "studies/report.hpp"
 
 #include "common/units.hpp"
@@ -80,8 +79,7 @@ std::string render_markdown(const TextTable& t) {
   return out;
 }
 
-// ---------------------------------------------------------------- per-point
-// tables
+// ---------------------------------------------------------------- per-point tables
 
 namespace {}  // namespace
 

@@ -55,7 +55,7 @@ const std::vector<std::string> kSeriesKeys{"label", "scenario", "set", "sweep"};
 const std::vector<std::string> kSweepKeys{"key", "values", "from", "to", "step"};
 const std::vector<std::string> kQuickKeys{"replicates", "models", "thin"};
 const std::vector<std::string> kConfirmKeys{"model", "top", "replicates", "rank_by"};
-const std::vector<std::string> kReportKeys{"kind", "baseline", "j"};
+const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max"};
 const std::vector<std::string> kJKinds{"paper", "flowing", "mid"};
 const std::vector<std::string> kReportKinds{"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"};
 
@@ -296,6 +296,8 @@ ReportDef read_report(StrictTable t) {
   }
   if (auto b = t.text("baseline", true)) r.baseline = *b;
   r.j = one_of(t, "j", kJKinds, r.j);
+  for (const char* k : {"fit_w_min", "fit_w_max"})  // read by the report (studies/report.cpp)
+    if (const toml::node* n = t.get(k); n && !n->is_number()) t.fail(k, *n, "must be a number (W/d)");
   return r;
 }
 

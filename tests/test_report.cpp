@@ -1,6 +1,5 @@
 // `gapflow report`: the tiny study end to end (points.csv, report.md, PNGs),
-// and the experiment analyses on hand-built stored runs whose answers are
-// known.
+// and the experiment analyses on hand-built stored runs whose answers are known.
 #include "studies/jobs.hpp"
 #include "studies/report.hpp"
 #include "studies/runner.hpp"
@@ -117,8 +116,7 @@ RunRecord synthetic_run(const std::string& model, double j, double distance_mm, 
 class SyntheticStore {
  public:
   explicit SyntheticStore(const fs::path& db) : store_(db) {}
-  // `values` replicates of one point; axes_json built from the distance when
-  // given.
+  // `values` replicates of one point; axes_json built from the distance when given.
   void add_point(const std::string& series, const std::string& model, int point, std::optional<double> distance_mm,
                  const std::vector<double>& values, bool clogged = false) {
     for (std::size_t i = 0; i < values.size(); ++i) {
@@ -141,8 +139,7 @@ class SyntheticStore {
   int counter_ = 0;
 };
 
-// Six replicates around `mean` (sd ~ 0.19): a small, fixed scatter so bootstrap
-// intervals are tight.
+// Six replicates around `mean` (sd ~ 0.19): a small, fixed scatter so bootstrap intervals are tight.
 std::vector<double> around(double mean) {
   return {mean - 0.25, mean - 0.15, mean - 0.05, mean + 0.05, mean + 0.15, mean + 0.25};
 }
@@ -151,8 +148,7 @@ constexpr double kDiameterMm = 7.75;
 
 }  // namespace
 
-// ------------------------------------------------------------------ the tiny
-// study end to end
+// ------------------------------------------------------------------ the tiny study end to end
 
 class ReportTiny : public ::testing::Test {
  protected:
@@ -302,16 +298,14 @@ TEST_F(ReportTiny, EveryAnalysisKindRunsOnRealDataWithoutCrashing) {
   }
 }
 
-// ------------------------------------------------------------------
-// flow_vs_distance on known data
+// ------------------------------------------------------------------ flow_vs_distance on known data
 
 TEST(ReportFlowVsDistance, FindsThePeakAndTheSignificantRanges) {
   TempDir dir;
   {
     SyntheticStore s(dir / "runs.sqlite");
     s.add_point("none", "2d", 0, std::nullopt, around(10.0));
-    // J/J_0 by distance: 1.0, 1.2, 1.5, 1.2, 1.0, 0.8, 1.0, 1.2, then a point
-    // where nothing passed.
+    // J/J_0 by distance: 1.0, 1.2, 1.5, 1.2, 1.0, 0.8, 1.0, 1.2, then a point where nothing passed.
     const std::vector<double> gain{1.0, 1.2, 1.5, 1.2, 1.0, 0.8, 1.0, 1.2};
     for (std::size_t i = 0; i < gain.size(); ++i)
       s.add_point("cylinder", "2d", static_cast<int>(i), 10.0 * (i + 1), around(10.0 * gain[i]));
@@ -350,8 +344,7 @@ TEST(ReportFlowVsDistance, FindsThePeakAndTheSignificantRanges) {
   EXPECT_NEAR(r.below[0].from, 60.0 / kDiameterMm, 1e-9);
   EXPECT_EQ(r.below[0].n_points, 1u);
 
-  // The whole report on the same store: ratios in points.csv, n/a for the
-  // clogged point, the section.
+  // The whole report on the same store: ratios in points.csv, n/a for the clogged point, the section.
   std::ostringstream out, log;
   ReportRequest req;
   req.results = dir / "runs.sqlite";
@@ -408,9 +401,8 @@ TEST(ReportModels, IdenticalRecordsGiveRatioOneAndPerfectAgreement) {
 
 // ------------------------------------------------------------------ clogging
 
-// Runs whose avalanches after the first all have size s = 2^k - 1 at W/d =
-// sqrt(k): then ln(<s>+1) = ln 2 (W/d)^2 exactly (censoring-aware mean of equal
-// completed sizes = s).
+// Runs whose avalanches after the first all have size s = 2^k - 1 at W/d = sqrt(k): then
+// ln(<s>+1) = ln 2 (W/d)^2 exactly (the censoring-aware mean of equal completed sizes is s).
 TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
   std::vector<StoredRun> runs;
   for (int k = 1; k <= 4; ++k)
@@ -442,8 +434,7 @@ TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
   EXPECT_EQ(cs.fit.weighting, "interval widths");
   EXPECT_NEAR(cs.fit.slope, std::log(2.0), 1e-9);
   EXPECT_NEAR(cs.fit.intercept, 0.0, 1e-9);
-  // The generic clogging figure exists (avalanche data) and the section draws
-  // the fit onto it.
+  // The generic clogging figure exists (avalanche data) and the section draws the fit onto it.
   const auto figures = generic_figures(data, JKind::paper);
   EXPECT_TRUE(
       std::any_of(figures.begin(), figures.end(), [](const PlotFigure& f) { return f.file == "clogging.png"; }));
@@ -452,8 +443,7 @@ TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
   EXPECT_EQ(sec.overlays.at("clogging.png").at(0).x.size(), 2u);
   EXPECT_NE(render_markdown(sec.tables.at(1)).find("| small | 2D | 0.6931"), std::string::npos)
       << render_markdown(sec.tables.at(1));
-  // No J_paper anywhere (every run clogged): the tables say n/a and the J*
-  // figure has no line.
+  // No J_paper anywhere (every run clogged): the tables say n/a and the J* figure has no line.
   EXPECT_NE(render_text(point_tables(data, JKind::paper).at(0)).find("n/a"), std::string::npos);
 }
 
@@ -534,4 +524,21 @@ TEST(ReportPieces, MissingStoreIsBadInputAndNothingIsCreated) {
   std::ostringstream out, log;
   EXPECT_THROW(make_report(r, out, log), std::invalid_argument);
   EXPECT_FALSE(fs::exists(dir / "nothing"));
+}
+
+TEST(ReportPieces, ShippedStudiesReportTablesReadTheSameAsTheStudyLoader) {
+  int n = 0;
+  for (const auto& entry : fs::directory_iterator(source_path("studies/paper"))) {
+    if (entry.path().extension() != ".toml") continue;
+    ++n;
+    const StudyDef def = load_study(entry.path());
+    const StudyInfo info = read_study_info(entry.path());
+    EXPECT_EQ(info.name, def.name) << entry.path();
+    EXPECT_EQ(info.report.baseline, def.report.baseline) << entry.path();
+    EXPECT_EQ(to_string(info.report.j), "J_" + def.report.j) << entry.path();
+    std::vector<std::string> kinds;
+    for (ReportKind k : info.report.kinds) kinds.push_back(to_string(k));
+    EXPECT_EQ(kinds, def.report.kinds) << entry.path();
+  }
+  EXPECT_GT(n, 0) << "no shipped study files";
 }

@@ -303,8 +303,8 @@ TEST(StudyLoader, RejectsUnknownKeyInSweepAndUnknownSection) {
   ScenarioError e = study_error(study_text("", "[[series.sweep]]\nkey = \"plane.incline_deg\"\nvalue = [1]\n"));
   EXPECT_EQ(e.key(), "series.sweep.value");
   EXPECT_EQ(e.where().line, 9);
-  e = study_error(study_text("", "[report]\nx = 1\n"));
-  EXPECT_EQ(e.key(), "report");
+  e = study_error(study_text("", "[reprot]\nx = 1\n"));
+  EXPECT_EQ(e.key(), "reprot");
 }
 
 TEST(StudyLoader, RejectsBadModelsEntry) {
