@@ -1,5 +1,7 @@
 #include "app/cmd_report.hpp"
 
+#include "app/cli_errors.hpp"
+
 #include "common/scenario_loader.hpp"
 #include "studies/report.hpp"
 
@@ -17,8 +19,6 @@ struct ReportCommand::Options {
 
 namespace {
 
-constexpr int kFailure = 1;
-constexpr int kBadInput = 2;
 
 int cmd_report(const ReportCommand::Options& o) {
   ReportRequest r;
@@ -49,18 +49,7 @@ ReportCommand::~ReportCommand() = default;
 
 std::optional<int> ReportCommand::run() const {
   if (!o_->cmd->parsed()) return std::nullopt;
-  try {
-    return cmd_report(*o_);
-  } catch (const ScenarioError& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const std::invalid_argument& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const std::exception& e) {
-    std::cerr << "gapflow failed: " << e.what() << "\n";
-    return kFailure;
-  }
+  return exit_code_of([&] { return cmd_report(*o_); });
 }
 
 }  // namespace gapflow

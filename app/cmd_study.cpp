@@ -1,5 +1,8 @@
 #include "app/cmd_study.hpp"
 
+#include "app/cli_errors.hpp"
+#include "common/text_file.hpp"
+
 #include "studies/jobs.hpp"
 #include "studies/confirm.hpp"
 #include "studies/runner.hpp"
@@ -31,8 +34,6 @@ struct StudyCommands::Options {
 
 namespace {
 
-constexpr int kFailure = 1;
-constexpr int kBadInput = 2;
 constexpr int kInterrupted = 130;  // 128 + SIGINT, what shells report for Ctrl-C
 
 // Raised by SIGINT/SIGTERM; the workers' run_model calls poll it between steps.
@@ -139,7 +140,7 @@ int cmd_study(const StudyCommands::Options& o) {
   for (const FailedJob& f : s.failed)
     std::cerr << fmt::format("  failed {} series '{}' point {} '{}' model {} replicate {}: {}\n", f.id.key,
                              f.id.series, f.id.point, f.id.point_label, f.id.model, f.id.replicate, f.error);
-  return s.failed.empty() ? 0 : kFailure;
+  return s.failed.empty() ? 0 : kExitFailure;
 }
 
 int cmd_export(const StudyCommands::Options& o) {
@@ -149,15 +150,7 @@ int cmd_export(const StudyCommands::Options& o) {
     store.export_csv(o.table, std::cout);
     return 0;
   }
-  // Written under a temporary name and renamed when complete: never half a file.
-  const std::string tmp = o.csv + ".partial";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-    store.export_csv(o.table, out);
-    if (!out.flush()) throw std::runtime_error("error while writing " + tmp);
-  }
-  std::filesystem::rename(tmp, o.csv);
+  write_file_atomically(o.csv, [&](std::ostream& out) { store.export_csv(o.table, out); });
   return 0;
 }
 
@@ -186,18 +179,7 @@ StudyCommands::~StudyCommands() = default;
 std::optional<int> StudyCommands::run() const {
   const bool study = o_->study->parsed(), exporting = o_->export_cmd->parsed();
   if (!study && !exporting) return std::nullopt;
-  try {
-    return study ? cmd_study(*o_) : cmd_export(*o_);
-  } catch (const ScenarioError& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const std::invalid_argument& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const std::exception& e) {
-    std::cerr << "gapflow failed: " << e.what() << "\n";
-    return kFailure;
-  }
+  return exit_code_of([&] { return study ? cmd_study(*o_) : cmd_export(*o_); });
 }
 
 }  // namespace gapflow

@@ -5,12 +5,14 @@
 //   gapflow export DB --table TABLE --csv OUT.csv
 //   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots]
 // Exit codes: 0 success, 2 bad input (scenario or command line), 1 failure while running.
+#include "app/cli_errors.hpp"
 #include "app/cmd_report.hpp"
 #include "app/cmd_study.hpp"
 #include "app/models.hpp"
 #include "common/geometry.hpp"
 #include "common/scenario_loader.hpp"
 #include "common/statistics.hpp"
+#include "common/text_file.hpp"
 #include "common/units.hpp"
 
 #include <CLI/CLI.hpp>
@@ -27,8 +29,6 @@ namespace {
 
 using namespace gapflow;
 
-constexpr int kBadInput = 2;
-constexpr int kFailure = 1;
 
 struct ScenarioArgs {
   std::string file;
@@ -53,18 +53,6 @@ CompiledScenario load_and_compile(const ScenarioArgs& a) {
   } catch (const ScenarioInvalid& e) {
     throw locate(e, loaded);
   }
-}
-
-// Write to a temporary name and rename when complete: a reader never sees half a file.
-void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
-  const std::string tmp = path + ".partial";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-    write(out);
-    if (!out.flush()) throw std::runtime_error("error while writing " + tmp);
-  }
-  std::filesystem::rename(tmp, path);
 }
 
 // Replicates r0 .. r0+n-1 of one scenario, on `jobs` worker threads. Each run is
@@ -194,23 +182,14 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     app.exit(e);
-    return kBadInput;
+    return kExitBadInput;
   }
 
   if (auto code = study_commands.run()) return *code;
   if (auto code = report_command.run()) return *code;
-  try {
+  return exit_code_of([&] {
     if (*run) return cmd_run(run_args, model, out_path, quiet, replicates, jobs);
     if (*check) return cmd_check(check_args, print);
-  } catch (const ScenarioError& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const std::invalid_argument& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const std::exception& e) {
-    std::cerr << "gapflow failed: " << e.what() << "\n";
-    return kFailure;
-  }
-  return 0;
+    return 0;
+  });
 }

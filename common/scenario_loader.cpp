@@ -8,6 +8,7 @@
 #include "common/scenario_loader.hpp"
 
 #include "common/random.hpp"
+#include "common/text_file.hpp"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -807,11 +808,9 @@ LoadedScenario parse_scenario(std::string_view text, std::string_view source_nam
 }
 
 LoadedScenario load_scenario(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the scenario file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_with(text.str(), file.string(), overrides);
+  const std::optional<std::string> text = read_text_file(file);
+  if (!text) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the scenario file");
+  return parse_with(*text, file.string(), overrides);
 }
 
 ScenarioError locate(const ScenarioInvalid& e, const LoadedScenario& s) {

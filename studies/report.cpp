@@ -1,6 +1,8 @@
 // Report: the [report] options, grouping stored runs into points, and make_report().
 #include "studies/report.hpp"
 
+#include "common/text_file.hpp"
+
 #include "common/scenario_loader.hpp"
 
 #include <fmt/format.h>
@@ -145,11 +147,9 @@ StudyInfo parse_study_info(std::string_view text, std::string_view source_name) 
 }
 
 StudyInfo read_study_info(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the study file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  StudyInfo info = parse_study_info(text.str(), file.string());
+  const std::optional<std::string> text = read_text_file(file);
+  if (!text) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the study file");
+  StudyInfo info = parse_study_info(*text, file.string());
   info.file = file;
   return info;
 }

@@ -1,6 +1,8 @@
 // Report output: report.md and make_report(), which writes every file of a report.
 #include "studies/report.hpp"
 
+#include "common/text_file.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -117,18 +119,6 @@ std::string regenerate_command(const ReportRequest& r) {
 
 namespace {
 
-// Written under a temporary name and renamed when complete: never half a file.
-void write_atomically(const fs::path& path, const std::function<void(std::ostream&)>& write) {
-  const fs::path tmp = path.string() + ".partial";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
-    write(out);
-    if (!out.flush()) throw std::runtime_error("error while writing " + tmp.string());
-  }
-  fs::rename(tmp, path);
-}
-
 fs::path store_file(const fs::path& results) {
   const fs::path db = fs::is_directory(results) ? results / "runs.sqlite" : results;
   // Checked first: opening a missing store would create an empty one.
@@ -216,7 +206,7 @@ ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::
   o.n_points = data.points.size();
   o.n_runs = data.n_runs;
   o.points_csv = o.out_dir / "points.csv";
-  write_atomically(o.points_csv, [&](std::ostream& s) { write_points_csv(s, data); });
+  write_file_atomically(o.points_csv, [&](std::ostream& s) { write_points_csv(s, data); });
 
   MarkdownInput md;
   md.data = &data;
@@ -234,14 +224,14 @@ ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::
                 [](const PlotFigure& f) {  // e.g. J* where no run passed every particle
                   return std::all_of(f.lines.begin(), f.lines.end(), [](const PlotLine& l) { return l.x.empty(); });
                 });
-  write_atomically(o.out_dir / "plots.json", [&](std::ostream& s) { s << plot_spec_json(to_draw); });
+  write_file_atomically(o.out_dir / "plots.json", [&](std::ostream& s) { s << plot_spec_json(to_draw); });
   md.plot_warning = request.plots ? draw(to_draw, o.out_dir, md.pngs) : "not requested (--no-plots)";
   if (!md.plot_warning.empty()) log << "warning: no plots: " << md.plot_warning << "\n";
   for (const std::string& f : md.pngs) o.pngs.push_back(o.out_dir / f);
   o.plot_warning = md.plot_warning;
 
   o.markdown = o.out_dir / "report.md";
-  write_atomically(o.markdown, [&](std::ostream& s) { s << render_report_markdown(md); });
+  write_file_atomically(o.markdown, [&](std::ostream& s) { s << render_report_markdown(md); });
   out << fmt::format("wrote {}, {}, {} plot(s) in {}\n", o.points_csv.filename().string(),
                      o.markdown.filename().string(), o.pngs.size(), o.out_dir.string());
   return o;

@@ -4,6 +4,8 @@
 // in the list is a programming error, so the list cannot drift from the reader.
 #include "studies/study.hpp"
 
+#include "common/text_file.hpp"
+
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
@@ -359,11 +361,9 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
 }
 
 StudyDef load_study(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the study file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  StudyDef d = parse_study(text.str(), file.string(), file.parent_path());
+  const std::optional<std::string> text = read_text_file(file);
+  if (!text) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the study file");
+  StudyDef d = parse_study(*text, file.string(), file.parent_path());
   d.file = file;
   return d;
 }
