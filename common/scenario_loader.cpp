@@ -9,6 +9,7 @@
 
 #include "common/random.hpp"
 #include "common/text_file.hpp"
+#include "common/toml_parse.hpp"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -659,14 +660,7 @@ void apply_override(toml::table& doc, const std::string& text, int index, Reader
 LoadedScenario parse_with(std::string_view text, std::string source, const std::vector<std::string>& overrides) {
   Reader r;
   r.source = source;
-  toml::table doc;
-  try {
-    doc = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    const auto& p = e.source().begin;
-    throw ScenarioError({source, static_cast<int>(std::max(1u, p.line)), static_cast<int>(std::max(1u, p.column))},
-                        "", "", std::string(e.description()));
-  }
+  toml::table doc = parse_toml_located(text, source);
   for (std::size_t i = 0; i < overrides.size(); ++i) apply_override(doc, overrides[i], static_cast<int>(i + 1), r);
   LoadedScenario out;
   out.def = read_document(r, doc);

@@ -2,6 +2,7 @@
 #include "studies/report.hpp"
 
 #include "common/text_file.hpp"
+#include "common/toml_parse.hpp"
 
 #include "common/scenario_loader.hpp"
 
@@ -125,14 +126,7 @@ void read_study_table(const toml::table& t, StudyInfo& info) {
 
 StudyInfo parse_study_info(std::string_view text, std::string_view source_name) {
   const std::string source(source_name);
-  toml::table doc;
-  try {
-    doc = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    const auto& p = e.source().begin;
-    throw ScenarioError({source, static_cast<int>(std::max(1u, p.line)), static_cast<int>(std::max(1u, p.column))}, "",
-                        "", std::string(e.description()));
-  }
+  toml::table doc = parse_toml_located(text, source);
   StudyInfo info;
   if (const toml::table* s = doc["study"].as_table()) read_study_table(*s, info);
   if (const toml::array* series = doc["series"].as_array())

@@ -5,6 +5,7 @@
 #include "studies/study.hpp"
 
 #include "common/text_file.hpp"
+#include "common/toml_parse.hpp"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -326,14 +327,7 @@ const toml::table* sub_table(StrictTable& root, std::string_view key) {
 
 StudyDef parse_study(std::string_view text, std::string_view source_name, const std::filesystem::path& base_dir) {
   const std::string source(source_name);
-  toml::table doc;
-  try {
-    doc = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    const auto& p = e.source().begin;
-    throw ScenarioError({source, static_cast<int>(std::max(1u, p.line)), static_cast<int>(std::max(1u, p.column))},
-                        "", "", std::string(e.description()));
-  }
+  toml::table doc = parse_toml_located(text, source);
   StudyDef d;
   StrictTable root(&doc, "", source, kRootKeys);
   const toml::table* study = sub_table(root, "study");

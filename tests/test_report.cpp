@@ -25,20 +25,9 @@ namespace {
 
 // ------------------------------------------------------------------ helpers
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / fmt::format("gapflow-report-{}-{}", getpid(), info ? info->name() : "x");
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
+// A fresh folder per test (tests/test_support.hpp), named after this file's subject.
+struct TempDir : gapflow::testing::TempDir {
+  TempDir() : gapflow::testing::TempDir("gapflow-report") {}
 };
 
 std::string read_text(const fs::path& p) {

@@ -36,20 +36,9 @@ namespace {
 
 // ------------------------------------------------------------------ helpers
 
-// A fresh folder per test (ctest runs each test in its own process, in parallel).
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / fmt::format("gapflow-study-{}-{}", getpid(), info ? info->name() : "x");
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
+// A fresh folder per test (tests/test_support.hpp), named after this file's subject.
+struct TempDir : gapflow::testing::TempDir {
+  TempDir() : gapflow::testing::TempDir("gapflow-study") {}
 };
 
 fs::path tiny_study() { return source_path("studies/examples/tiny.toml"); }

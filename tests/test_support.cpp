@@ -1,5 +1,8 @@
 #include "tests/test_support.hpp"
 
+#include <gtest/gtest.h>
+#include <unistd.h>
+
 namespace gapflow::testing {
 
 std::filesystem::path source_path(const std::string& relative) {
@@ -23,5 +26,15 @@ CompiledScenario compile_file(const std::string& relative, const std::vector<std
     throw locate(e, loaded);
   }
 }
+
+TempDir::TempDir(const std::string& prefix) {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  path_ = std::filesystem::temp_directory_path() /
+          (prefix + "-" + std::to_string(getpid()) + "-" + (info ? info->name() : "x"));
+  std::filesystem::remove_all(path_);
+  std::filesystem::create_directories(path_);
+}
+
+TempDir::~TempDir() { std::filesystem::remove_all(path_); }
 
 }  // namespace gapflow::testing

@@ -19,4 +19,18 @@ CompiledScenario compile_text(const std::string& toml, const std::vector<std::st
 // Load and compile a shipped scenario file.
 CompiledScenario compile_file(const std::string& relative, const std::vector<std::string>& overrides = {});
 
+// A fresh folder per test, removed afterwards (ctest runs tests in parallel processes).
+class TempDir {
+ public:
+  explicit TempDir(const std::string& prefix);
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
 }  // namespace gapflow::testing
