@@ -74,7 +74,6 @@ struct CompiledScenario {
 
   // Derived, for reports.
   double w_over_d() const { return gap / nominal_diameter; }
-  double d_over_d() const { return def.obstruction.distance_mm * 1e-3 / nominal_diameter; }
   // Gravity component along the board, m/s^2 (g sin theta).
   double inplane_gravity() const;
   // Gravity component normal to the board, m/s^2 (g cos theta).

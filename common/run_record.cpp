@@ -86,7 +86,7 @@ void write_json(std::ostream& out, const RunRecord& r) {
       {"distance_m", r.distance_m},
       {"incline_rad", r.incline_rad},
       {"w_over_d", r.gap_m / r.diameter_m},
-      {"d_over_d", r.distance_m / r.diameter_m},
+      {"distance_over_d", r.distance_m / r.diameter_m},  // D/d
       {"particles", r.particles},
       {"passed", r.passed},
       {"reinjected", r.reinjected},

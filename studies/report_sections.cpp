@@ -173,8 +173,8 @@ ExperimentSection flow_vs_distance_section(const ReportData& data, const ReportO
                     "other series and model, each point's "
                     "mean {} is compared to J_0 as the ratio of means with a 95 % "
                     "percentile bootstrap interval; "
-                    "\"significantly above\" means the interval lies above 1 (Welch's "
-                    "t-test p-value as a cross-check). "
+                    "\"significantly above\" means the interval lies above 1 AND Welch's "
+                    "t-test gives p < 0.05 (both must agree; below likewise). "
                     "The peak is the point of largest mean {}.",
                     to_string(a.j), a.baseline, to_string(a.j), to_string(a.j)));
   }

@@ -33,7 +33,8 @@ CREATE TABLE IF NOT EXISTS runs (
   sim_time_s REAL NOT NULL, wall_time_s REAL NOT NULL, end_reason TEXT NOT NULL, regime TEXT NOT NULL,
   j_paper REAL, j_flowing REAL, j_mid REAL, j_paper_star REAL, j_flowing_star REAL,
   diameter_m REAL NOT NULL, gap_m REAL NOT NULL, distance_m REAL NOT NULL, w_over_d REAL NOT NULL,
-  d_over_d REAL NOT NULL, incline_rad REAL NOT NULL, time_step_s REAL NOT NULL,
+  d_over_d REAL NOT NULL,  -- D/d: obstruction distance over the nominal diameter
+  incline_rad REAL NOT NULL, time_step_s REAL NOT NULL,
   n_clogs INTEGER NOT NULL, n_avalanches INTEGER NOT NULL,
   finished_at TEXT NOT NULL
 );
