@@ -129,8 +129,12 @@ void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
   r.j_paper.reset();
   r.j_flowing.reset();
   r.j_mid.reset();
-  // The paper's J needs a board that emptied completely, once.
-  if (n > 0 && passed_ == particles() && reinjected_ == 0) r.j_paper = n / r.crossings.back().t;
+  // The paper's J needs a board that emptied once; up to run.stranded_max particles
+  // may stay behind if the flow has stopped for good (J is then over those that passed).
+  const int left_behind = particles() - passed_;
+  const bool emptied = left_behind == 0 ||
+                       (reason == EndReason::permanent_clog && left_behind <= sc_.def.run.stranded_max);
+  if (n > 0 && emptied && reinjected_ == 0) r.j_paper = n / r.crossings.back().t;
   // Rate while flowing: the crossing intervals inside avalanches only. A clog's
   // duration runs from crossing to crossing, so it must not also remove an interval.
   int intervals = 0;

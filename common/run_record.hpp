@@ -69,7 +69,7 @@ struct RunRecord {
   Regime regime = Regime::continuous;
 
   // Flow rates, particles/s. Missing when undefined.
-  std::optional<double> j_paper;     // N / time for all to pass (only when all passed)
+  std::optional<double> j_paper;     // N / time for all to pass (all passed, or all but run.stranded_max stopped for good)
   std::optional<double> j_flowing;   // crossings per second of flowing time (clogs removed)
   std::optional<double> j_mid;       // rate between the 10 % and 90 % crossings
 

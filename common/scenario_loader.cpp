@@ -492,6 +492,7 @@ void read_run(Section s, RunDef& r, int particle_count) {
   s.integer("n_passed", r.n_passed, 0);
   s.number("clog_timeout_s", r.clog_timeout_s, above(0, "s"));
   s.number("stop_after_no_flow_s", r.stop_after_no_flow_s, at_least(0, "s"));
+  s.integer("stranded_max", r.stranded_max, 0);
   if (auto seed = s.integer_value("seed", 0)) r.seed = static_cast<std::uint64_t>(*seed);
   s.integer("replicate", r.replicate, 0);
   s.finish();
@@ -766,6 +767,7 @@ void write_run(TomlWriter& w, const RunDef& r) {
   w.put("n_passed", r.n_passed);
   w.put("clog_timeout_s", r.clog_timeout_s);
   w.put("stop_after_no_flow_s", r.stop_after_no_flow_s);
+  w.put("stranded_max", r.stranded_max);
   w.put("seed", r.seed);
   w.put("replicate", r.replicate);
 }

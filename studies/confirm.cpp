@@ -33,6 +33,7 @@ std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::
       sums[k].first += *j;
       sums[k].second += 1;
     }
+    p.runs_with_j = sums[k].second;
   }
   std::vector<RankedPoint> out;
   for (auto& [k, p] : points) {
@@ -40,8 +41,14 @@ std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::
     p.mean_j = n > 0 ? sum / n : -1.0;
     out.push_back(p);
   }
-  // Best first; ties in study order (series label, then point) so the choice is deterministic.
-  std::stable_sort(out.begin(), out.end(), [](const RankedPoint& a, const RankedPoint& b) { return a.mean_j > b.mean_j; });
+  // A candidate must have a J in every screening run: a point where some runs never
+  // emptied would otherwise rank by its lucky runs alone. Then best mean J first; ties
+  // in study order (series label, then point) so the choice is deterministic.
+  std::stable_sort(out.begin(), out.end(), [](const RankedPoint& a, const RankedPoint& b) {
+    const bool a_complete = a.runs_with_j == a.runs, b_complete = b.runs_with_j == b.runs;
+    if (a_complete != b_complete) return a_complete;
+    return a.mean_j > b.mean_j;
+  });
   return out;
 }
 
@@ -52,6 +59,8 @@ std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoi
   StudyDef confirming = study;
   confirming.models = {study.confirm.model};
   confirming.replicates = study.confirm.replicates;
+  confirming.per_model.clear();
+  for (SeriesDef& s : confirming.series) s.set.insert(s.set.end(), study.confirm.set.begin(), study.confirm.set.end());
   std::vector<Job> out;
   for (Job& j : expand_jobs(confirming))
     if (chosen.count({j.id.series, j.id.point})) out.push_back(std::move(j));

@@ -17,14 +17,16 @@ struct RankedPoint {
   std::string point_label;
   double mean_j = 0;  // particles/s, over the screen's replicates
   int runs = 0;
+  int runs_with_j = 0;  // runs in which the ranking J is defined (J_paper: the board emptied)
 };
 
-// The screen's points (the study's own models, from the store), best first.
-// Points where J is undefined in every run rank last.
+// The screen's points (the study's own models, from the store), best first: points
+// with J in every run by mean J, then points where some run had no J (never emptied).
 std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::vector<StoredRun>& runs);
 
 // The confirming jobs: study.confirm.replicates runs with study.confirm.model for
-// each of the top study.confirm.top ranked points (job keys as in expand_jobs).
+// each of the top study.confirm.top ranked points (job keys as in expand_jobs), with
+// [confirm] set applied after the study's and the series' overrides.
 std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoint>& ranked);
 
 }  // namespace gapflow

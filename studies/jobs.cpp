@@ -48,6 +48,13 @@ std::vector<Point> grid_points(const SeriesDef& s) {
   return out;
 }
 
+// Whether a model with [per_model] thin runs this point (the point keeps its index in the full grid).
+bool kept_by_thinning(const SeriesDef& s, const Point& p, int thin) {
+  for (std::size_t k = 0; k < s.axes.size(); ++k)
+    if (!thin_keeps(p.value_of_axis[k], s.axes[k].values.size(), thin)) return false;
+  return true;
+}
+
 // The point's overrides with their study-file locations, its label and its JSON.
 struct PointSpec {
   std::vector<LocatedOverride> overrides;
@@ -164,7 +171,8 @@ std::vector<Job> expand_jobs(const StudyDef& study) {
     for (const Point& p : grid_points(s)) {
       const PointSpec spec = point_spec(study, s, p);
       for (ModelKind model : study.models) {
-        for (int r = 0; r < study.replicates; ++r) {
+        if (!kept_by_thinning(s, p, thin_for(study, model))) continue;
+        for (int r = 0; r < replicates_for(study, model); ++r) {
           Job job = make_job(study, s, text, p, spec, model, r);
           check_unique(first_of_key, jobs, job, spec, study.file.string());
           jobs.push_back(std::move(job));

@@ -83,7 +83,10 @@ DistanceResult distance_result(const ReportData& data, const std::string& series
   std::vector<std::pair<double, Verdict>> by_d;
   for (const ReportPoint* p : pts) {
     const MeanCI m = mean_ci(j_stats(p->stats, opt.j).t);
-    if (m.n > 0 && (!peak || m.mean > mean_ci(j_stats(peak->stats, opt.j).t).mean)) peak = p;
+    // A peak needs J in every run: a point where some runs never emptied would
+    // otherwise be ranked by its lucky runs alone.
+    const bool complete = m.n > 0 && m.n == p->stats.n_runs;
+    if (complete && (!peak || m.mean > mean_ci(j_stats(peak->stats, opt.j).t).mean)) peak = p;
     const ReportPoint* ref = baseline_for(data, *p);
     if (!ref) continue;
     const RatioComparison c = compare_to_baseline(p->stats, ref->stats, opt.j);

@@ -175,7 +175,9 @@ ExperimentSection flow_vs_distance_section(const ReportData& data, const ReportO
                     "percentile bootstrap interval; "
                     "\"significantly above\" means the interval lies above 1 AND Welch's "
                     "t-test gives p < 0.05 (both must agree; below likewise). "
-                    "The peak is the point of largest mean {}.",
+                    "The peak is the point of largest mean {} among the points where every run has it "
+                    "(J_paper: the board emptied). At a point where only some runs emptied, the mean and the "
+                    "verdict use those runs alone and read high: check the 'all passed' column.",
                     to_string(a.j), a.baseline, to_string(a.j), to_string(a.j)));
   }
   TextTable t;

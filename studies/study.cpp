@@ -52,12 +52,14 @@ SourceLocation location_of(const std::string& source, const toml::node& n) {
 }
 
 // The keys each table allows.
-const std::vector<std::string> kRootKeys{"study", "series", "quick", "confirm", "report"};
+const std::vector<std::string> kRootKeys{"study", "series", "per_model", "quick", "confirm", "report"};
 const std::vector<std::string> kStudyKeys{"name", "description", "replicates", "models", "seed", "set"};
 const std::vector<std::string> kSeriesKeys{"label", "scenario", "set", "sweep"};
 const std::vector<std::string> kSweepKeys{"key", "values", "from", "to", "step"};
 const std::vector<std::string> kQuickKeys{"replicates", "models", "thin"};
-const std::vector<std::string> kConfirmKeys{"model", "top", "replicates", "rank_by"};
+const std::vector<std::string> kPlanKeys{"replicates", "thin"};
+const std::vector<std::string> kModelNames{"2d", "3d"};
+const std::vector<std::string> kConfirmKeys{"model", "top", "replicates", "rank_by", "set"};
 const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max"};
 const std::vector<std::string> kJKinds{"paper", "flowing", "mid"};
 const std::vector<std::string> kReportKinds{"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"};
@@ -262,6 +264,13 @@ QuickDef read_quick(StrictTable t) {
   return q;
 }
 
+ModelPlan read_plan(StrictTable t) {
+  ModelPlan m;
+  if (auto r = t.integer("replicates", 1)) m.replicates = static_cast<int>(*r);
+  if (auto k = t.integer("thin", 1)) m.thin = static_cast<int>(*k);
+  return m;
+}
+
 std::string one_of(StrictTable& t, std::string_view key, const std::vector<std::string>& allowed,
                    const std::string& fallback) {
   auto v = t.text(key);
@@ -281,6 +290,7 @@ ConfirmDef read_confirm(StrictTable t) {
   if (auto k = t.integer("top", 1)) c.top = static_cast<int>(*k);
   if (auto r = t.integer("replicates", 1)) c.replicates = static_cast<int>(*r);
   c.rank_by = one_of(t, "rank_by", kJKinds, c.rank_by);
+  c.set = read_set(t);
   return c;
 }
 
@@ -342,6 +352,12 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
     d.series.push_back(std::move(s));
   }
   if (d.series.empty()) throw ScenarioError({source, 1, 1}, "series", "", "required: at least one [[series]]");
+  if (const toml::table* pm = sub_table(root, "per_model")) {
+    StrictTable plans(pm, "per_model", source, kModelNames);
+    for (const std::string& name : kModelNames)
+      if (const toml::table* t = sub_table(plans, name))
+        d.per_model[parse_model_kind(name)] = read_plan(StrictTable(t, "per_model." + name, source, kPlanKeys));
+  }
   if (const toml::table* q = sub_table(root, "quick")) d.quick = read_quick(StrictTable(q, "quick", source, kQuickKeys));
   if (const toml::table* c = sub_table(root, "confirm"))
     d.confirm = read_confirm(StrictTable(c, "confirm", source, kConfirmKeys));
@@ -362,17 +378,32 @@ StudyDef load_study(const std::filesystem::path& file) {
   return d;
 }
 
+bool thin_keeps(std::size_t i, std::size_t n, int thin) {
+  return i % static_cast<std::size_t>(std::max(1, thin)) == 0 || i + 1 == n;
+}
+
 std::vector<AxisValue> thin_values(const std::vector<AxisValue>& values, int thin) {
   std::vector<AxisValue> out;
   for (std::size_t i = 0; i < values.size(); ++i)
-    if (i % static_cast<std::size_t>(std::max(1, thin)) == 0 || i + 1 == values.size()) out.push_back(values[i]);
+    if (thin_keeps(i, values.size(), thin)) out.push_back(values[i]);
   return out;
+}
+
+int replicates_for(const StudyDef& study, ModelKind model) {
+  auto it = study.per_model.find(model);
+  return it != study.per_model.end() && it->second.replicates ? *it->second.replicates : study.replicates;
+}
+
+int thin_for(const StudyDef& study, ModelKind model) {
+  auto it = study.per_model.find(model);
+  return it != study.per_model.end() ? it->second.thin : 1;
 }
 
 StudyDef apply_quick(StudyDef study) {
   if (study.quick.replicates) study.replicates = *study.quick.replicates;
   if (study.quick.models) study.models = *study.quick.models;
   if (study.quick.replicates) study.confirm.replicates = std::min(study.confirm.replicates, *study.quick.replicates);
+  study.per_model.clear();  // --quick: one budget for every model
   for (SeriesDef& s : study.series)
     for (SweepAxis& a : s.axes) a.values = thin_values(a.values, study.quick.thin);
   return study;

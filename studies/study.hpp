@@ -6,8 +6,11 @@
 //   [study]     name, description, replicates, models, seed, set
 //   [[series]]  label, scenario (relative to the study file), set
 //     [[series.sweep]]  key + values, or key + from/to/step (inclusive)
+//   [per_model.2d] / [per_model.3d]  replicates, thin  (a model's own budget: the 3D
+//               model costs ~3x the 2D one per run, so it may run fewer replicates on a
+//               coarser grid; its points keep their indices in the full grid)
 //   [quick]     replicates, models, thin  (what --quick changes)
-//   [confirm]   model, top, replicates, rank_by  (screen -> confirm)
+//   [confirm]   model, top, replicates, rank_by, set  (screen -> confirm)
 //   [report]    kind (string or list), baseline, j
 #pragma once
 
@@ -16,6 +19,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -51,6 +55,12 @@ struct SeriesDef {
   std::vector<SweepAxis> axes;     // grid = cartesian product; first axis varies slowest
 };
 
+// [per_model.<model>]: one model's replicates and grid thinning, instead of the study's.
+struct ModelPlan {
+  std::optional<int> replicates;  // per point (default: [study] replicates)
+  int thin = 1;                   // run every thin-th value of each axis (always the first and the last)
+};
+
 // [quick]: a cheaper version of the study for a first look.
 struct QuickDef {
   std::optional<int> replicates;
@@ -66,6 +76,7 @@ struct ConfirmDef {
   int top = 3;                     // points confirmed (over all series)
   int replicates = 10;             // per confirmed point
   std::string rank_by = "paper";   // J used for ranking: paper | flowing | mid
+  std::vector<LocatedOverride> set; // overrides for the confirming runs only, after the study's and series'
 };
 
 // [report]: which experiment analyses `gapflow report` runs (studies/report*.cpp).
@@ -84,6 +95,7 @@ struct StudyDef {
   std::uint64_t seed = 1;      // run.seed of every job
   std::vector<LocatedOverride> set;  // overrides for every series
   std::vector<SeriesDef> series;
+  std::map<ModelKind, ModelPlan> per_model;
   QuickDef quick;
   ConfirmDef confirm;
   ReportDef report;
@@ -100,5 +112,11 @@ StudyDef apply_quick(StudyDef study);
 
 // Every thin-th element of an axis, always keeping the first and the last.
 std::vector<AxisValue> thin_values(const std::vector<AxisValue>& values, int thin);
+// Whether thin_values keeps the i-th of n values.
+bool thin_keeps(std::size_t i, std::size_t n, int thin);
+
+// The replicates and thinning `model` runs with (its [per_model] entry, else the study's).
+int replicates_for(const StudyDef& study, ModelKind model);
+int thin_for(const StudyDef& study, ModelKind model);
 
 }  // namespace gapflow

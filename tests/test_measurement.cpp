@@ -105,3 +105,27 @@ TEST(GapMonitor, AParticleThatVanishesBreaksConservation) {
   m.finish(0.1, EndReason::time_limit, r);
   EXPECT_EQ(r.max_conservation_error, 1);
 }
+
+// J_paper = N/T needs a board that emptied; run.stranded_max particles may stay behind
+// (e.g. balanced on a V's flat face) if the flow stopped for good -- never at a time limit.
+TEST(GapMonitor, StrandedParticlesCountAsEmptiedOnlyWhenAllowedAndTheFlowStoppedForGood) {
+  auto record = [](std::vector<std::string> set, EndReason reason) {
+    set.push_back("particles.count=3");
+    const CompiledScenario sc = gapflow::testing::compile_file("scenarios/paper/no_obstruction_medium.toml", set);
+    GapMonitor m(sc);
+    for (int i = 0; i < 3; ++i) m.observe(i, {0.0, 0.001}, 0.1);
+    m.end_step(0.1);
+    m.observe(0, {0.0, -0.001}, 0.2);  // crossing at 0.15
+    m.observe(1, {0.0, -0.001}, 0.2);
+    m.observe(2, {0.0, 0.05}, 0.2);   // stays behind
+    m.end_step(0.2);
+    RunRecord r;
+    m.finish(40.0, reason, r);
+    return r;
+  };
+  EXPECT_FALSE(record({"run.stranded_max=0"}, EndReason::permanent_clog).j_paper) << "none may stay behind";
+  const RunRecord allowed = record({"run.stranded_max=1"}, EndReason::permanent_clog);
+  ASSERT_TRUE(allowed.j_paper);
+  EXPECT_NEAR(*allowed.j_paper, 2 / 0.15, 1e-9) << "N passed / time of the last crossing";
+  EXPECT_FALSE(record({"run.stranded_max=1"}, EndReason::time_limit).j_paper) << "a run cut by the time limit";
+}

@@ -93,6 +93,7 @@ const BadCase kBadCases[] = {
      "run.n_passed", 7},
     {"stop_before_clog", kHead + "[run]\nclog_timeout_s = 2.0\nstop_after_no_flow_s = 1.0\n",
      "run.stop_after_no_flow_s", 5},
+    {"stranded_negative", kHead + "[run]\nstranded_max = -1\n", "run.stranded_max", 4},
     {"float_seed", kHead + "[run]\nseed = 1.5\n", "run.seed", 4},
     {"negative_seed", kHead + "[run]\nseed = -1\n", "run.seed", 4},
     {"bad_end", kHead + "[run]\nend = \"never\"\n", "run.end", 4},
@@ -413,6 +414,7 @@ void expect_same(const ScenarioDef& a, const ScenarioDef& b) {
   EXPECT_EQ(a.run.n_passed, b.run.n_passed);
   EXPECT_EQ(a.run.clog_timeout_s, b.run.clog_timeout_s);
   EXPECT_EQ(a.run.stop_after_no_flow_s, b.run.stop_after_no_flow_s);
+  EXPECT_EQ(a.run.stranded_max, b.run.stranded_max);
   EXPECT_EQ(a.run.seed, b.run.seed);
   EXPECT_EQ(a.run.replicate, b.run.replicate);
   expect_same_model(a.model, b.model);
@@ -435,7 +437,7 @@ ScenarioDef all_fields_changed() {
   d.obstruction.lateral_offset_mm = -1e-7;
   d.shaking.walls = {true, 0.75, 90.0, false, 0.5, 2.0, 1.5, 30.0};
   d.shaking.obstruction = {true, 1.0, -45.0, false, 0.25, 0.5, 0.1, 7.5};
-  d.run = {gapflow::EndCondition::time_limit, 120.0, 400, 2.5, 10.0, 1234567890123ull, 3};
+  d.run = {gapflow::EndCondition::time_limit, 120.0, 400, 2.5, 10.0, 7, 1234567890123ull, 3};
   d.protocol = {gapflow::ClogBreaking::local_perturbation, true, 4.5};
   d.model.box2d = {0.0004, 12, 4, true, true, 2.5, {false, 2.0 / 3.0}, {false, gapflow::BaseFrictionMethod::joint}};
   d.model.bullet = {0.0005, 4, 50, true, 10.0, 3.5, 0.05};

@@ -1,6 +1,7 @@
 // The study runner and its results store: study loader, job expansion, SQLite
 // round trip, determinism across worker counts, resume after kill -9, Ctrl-C.
 // Simulations use studies/examples/tiny.toml (12 runs of 60 spheres, ~0.2 s each).
+#include "studies/confirm.hpp"
 #include "studies/jobs.hpp"
 #include "studies/runner.hpp"
 #include "studies/store.hpp"
@@ -380,6 +381,64 @@ TEST(StudyJobs, GridIsTheCartesianProductInOrder) {
   EXPECT_EQ(jobs.back().id.point, 5);
   EXPECT_EQ(jobs[0].overrides.back(), "run.replicate=0");
   EXPECT_EQ(jobs[0].overrides[jobs[0].overrides.size() - 2], "run.seed=1");
+}
+
+// [per_model]: the 3D model runs fewer replicates on every other value; its points keep
+// their full-grid indices, so 2D and 3D line up point by point.
+TEST(StudyJobs, PerModelPlanThinsAndCutsReplicatesOfThatModelOnly) {
+  const StudyDef s = parse(study_text("replicates = 3\nmodels = [\"2d\", \"3d\"]\nset = [\"particles.count=20\"]",
+                                      "[[series.sweep]]\nkey = \"bottleneck.gap_mm\"\nvalues = [30, 35, 40, 45, 50]\n"
+                                      "[per_model.3d]\nreplicates = 1\nthin = 2\n"));
+  const std::vector<Job> jobs = expand_jobs(s);
+  std::vector<int> points_3d;
+  int runs_2d = 0;
+  for (const Job& j : jobs) (j.id.model == "3d" ? points_3d.push_back(j.id.point) : void(++runs_2d));
+  EXPECT_EQ(runs_2d, 5 * 3);
+  EXPECT_EQ(points_3d, (std::vector<int>{0, 2, 4}));
+  EXPECT_EQ(expand_jobs(apply_quick(s)).size(), 5u * 2u * 3u) << "--quick has one budget for every model";
+  const ScenarioError e = [] {
+    try {
+      parse(study_text("", "[per_model.4d]\nreplicates = 1\n"));
+    } catch (const ScenarioError& e) {
+      return e;
+    }
+    return ScenarioError({}, "", "", "");
+  }();
+  EXPECT_EQ(e.key(), "per_model.4d");
+  EXPECT_EQ(e.where().line, 7);
+}
+
+// Screen ranking: a point must have J in every screening run to outrank one that has;
+// the confirming jobs carry [confirm] set after the study's overrides.
+TEST(StudyConfirm, RanksCompletePointsFirstAndAppliesConfirmSet) {
+  const StudyDef s = parse(study_text("replicates = 2\nset = [\"particles.count=20\", \"run.time_limit_s=25\"]",
+                                      "[[series.sweep]]\nkey = \"bottleneck.gap_mm\"\nvalues = [30, 35, 40]\n"
+                                      "[confirm]\ntop = 1\nreplicates = 1\nset = [\"run.time_limit_s=60\"]\n"));
+  std::vector<StoredRun> runs;
+  auto add = [&](int point, std::optional<double> j) {
+    StoredRun r;
+    r.id.study = "t", r.id.series = "a", r.id.model = "2d", r.id.point = point;
+    r.record.j_paper = j;
+    runs.push_back(r);
+  };
+  add(0, 90.0), add(0, 92.0);          // complete, mean 91
+  add(1, 120.0), add(1, std::nullopt);  // one lucky run: must not win
+  add(2, 80.0), add(2, 84.0);          // complete, mean 82
+  const std::vector<RankedPoint> ranked = rank_screened_points(s, runs);
+  ASSERT_EQ(ranked.size(), 3u);
+  EXPECT_EQ(ranked[0].point, 0);
+  EXPECT_EQ(ranked[1].point, 2);
+  EXPECT_EQ(ranked[2].point, 1);
+  EXPECT_EQ(ranked[2].runs_with_j, 1);
+  const std::vector<Job> jobs = confirm_jobs(s, ranked);
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(jobs[0].id.model, "3d");
+  EXPECT_EQ(jobs[0].id.point, 0);
+  const auto& o = jobs[0].overrides;
+  const auto at = [&](const std::string& text) { return std::find(o.begin(), o.end(), text) - o.begin(); };
+  EXPECT_LT(at("run.time_limit_s=25"), at("run.time_limit_s=60")) << "the confirm override comes last and wins";
+  EXPECT_LT(at("run.time_limit_s=60"), static_cast<std::ptrdiff_t>(o.size()));
+  EXPECT_DOUBLE_EQ(compile_job(jobs[0]).def.run.time_limit_s, 60.0);
 }
 
 TEST(StudyJobs, ThinKeepsFirstAndLast) {
