@@ -130,11 +130,18 @@ void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
   r.j_flowing.reset();
   r.j_mid.reset();
   // The paper's J needs a board that emptied once; up to run.stranded_max particles
-  // may stay behind if the flow has stopped for good (J is then over those that passed).
+  // may stay behind (J is then over those that passed, N_passed / t_last). The end
+  // reason does not matter: with stop_after_no_flow_s = 20 s a stranded run often
+  // reaches the time limit before it is declared clogged.
   const int left_behind = particles() - passed_;
-  const bool emptied = left_behind == 0 ||
-                       (reason == EndReason::permanent_clog && left_behind <= sc_.def.run.stranded_max);
-  if (n > 0 && emptied && reinjected_ == 0) r.j_paper = n / r.crossings.back().t;
+  const bool emptied = n > 0 && reinjected_ == 0 && left_behind <= sc_.def.run.stranded_max;
+  if (emptied) r.j_paper = n / r.crossings.back().t;
+  // The wait after the last crossing of an emptied board is not a clog of the flow:
+  // the discharge ended there, as if the stranded spheres had passed.
+  if (emptied && left_behind > 0 && !r.clogs.empty() && r.clogs.back().censored) {
+    r.clogs.pop_back();
+    if (!r.avalanches.empty()) r.avalanches.back().censored = true;
+  }
   // Rate while flowing: the crossing intervals inside avalanches only. A clog's
   // duration runs from crossing to crossing, so it must not also remove an interval.
   int intervals = 0;
@@ -150,7 +157,7 @@ void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
     const double dt = r.crossings[i90].t - r.crossings[i10].t;
     if (dt > 0) r.j_mid = (i90 - i10) / dt;
   }
-  if (reason == EndReason::permanent_clog)
+  if (reason == EndReason::permanent_clog && !emptied)
     r.regime = Regime::clogged;
   else
     r.regime = r.clogs.empty() ? Regime::continuous : Regime::intermittent;

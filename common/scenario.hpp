@@ -114,7 +114,7 @@ struct RunDef {
   int n_passed = 0;                 // particles, for end = "n_passed"
   double clog_timeout_s = 1.0;      // s, no crossing for this long = a clog
   double stop_after_no_flow_s = 30.0; // s, stop (permanent clog) after this long without a crossing; 0 = never
-  int stranded_max = 0;             // particles that may stay behind when the flow stops for good and the
+  int stranded_max = 0;             // particles that may be left when the run ends (any reason) and the
                                     // discharge still counts as complete for J_paper (a sphere balanced on
                                     // an obstruction's flat upstream face never leaves; the paper's J = N/T
                                     // is then taken over the particles that did pass)

@@ -43,7 +43,7 @@ std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::
   }
   // A candidate must have a J in every screening run: a point where some runs never
   // emptied would otherwise rank by its lucky runs alone. Then best mean J first; ties
-  // in study order (series label, then point) so the choice is deterministic.
+  // by series label (alphabetical), then point, so the choice is deterministic.
   std::stable_sort(out.begin(), out.end(), [](const RankedPoint& a, const RankedPoint& b) {
     const bool a_complete = a.runs_with_j == a.runs, b_complete = b.runs_with_j == b.runs;
     if (a_complete != b_complete) return a_complete;
@@ -56,6 +56,9 @@ std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoi
   std::set<std::pair<std::string, int>> chosen;
   for (size_t i = 0; i < ranked.size() && static_cast<int>(i) < study.confirm.top; ++i)
     chosen.insert({ranked[i].series, ranked[i].point});
+  // The baseline is always confirmed too: J/J_0 of a confirmed point needs J_0 of its own model.
+  for (const RankedPoint& p : ranked)
+    if (p.series == study.report.baseline) chosen.insert({p.series, p.point});
   StudyDef confirming = study;
   confirming.models = {study.confirm.model};
   confirming.replicates = study.confirm.replicates;

@@ -26,7 +26,8 @@ std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::
 
 // The confirming jobs: study.confirm.replicates runs with study.confirm.model for
 // each of the top study.confirm.top ranked points (job keys as in expand_jobs), with
-// [confirm] set applied after the study's and the series' overrides.
+// [confirm] set applied after the study's and the series' overrides. The points of
+// the report's baseline series are always confirmed as well (J/J_0 per model).
 std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoint>& ranked);
 
 }  // namespace gapflow

@@ -90,7 +90,7 @@ struct StudyDef {
   std::filesystem::path file;  // the study file ("" when parsed from text)
   std::string name;
   std::string description;
-  int replicates = 1;          // per point and model
+  int replicates = 20;         // per point and model (the paper repeats each point 20 times)
   std::vector<ModelKind> models{ModelKind::box2d};
   std::uint64_t seed = 1;      // run.seed of every job
   std::vector<LocatedOverride> set;  // overrides for every series

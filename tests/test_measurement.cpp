@@ -107,8 +107,9 @@ TEST(GapMonitor, AParticleThatVanishesBreaksConservation) {
 }
 
 // J_paper = N/T needs a board that emptied; run.stranded_max particles may stay behind
-// (e.g. balanced on a V's flat face) if the flow stopped for good -- never at a time limit.
-TEST(GapMonitor, StrandedParticlesCountAsEmptiedOnlyWhenAllowedAndTheFlowStoppedForGood) {
+// (e.g. balanced on a V's flat face), whatever ended the run, and the wait after the
+// last crossing is then not a clog.
+TEST(GapMonitor, StrandedParticlesCountAsEmptiedWhenAllowed) {
   auto record = [](std::vector<std::string> set, EndReason reason) {
     set.push_back("particles.count=3");
     const CompiledScenario sc = gapflow::testing::compile_file("scenarios/paper/no_obstruction_medium.toml", set);
@@ -123,9 +124,19 @@ TEST(GapMonitor, StrandedParticlesCountAsEmptiedOnlyWhenAllowedAndTheFlowStopped
     m.finish(40.0, reason, r);
     return r;
   };
-  EXPECT_FALSE(record({"run.stranded_max=0"}, EndReason::permanent_clog).j_paper) << "none may stay behind";
-  const RunRecord allowed = record({"run.stranded_max=1"}, EndReason::permanent_clog);
-  ASSERT_TRUE(allowed.j_paper);
-  EXPECT_NEAR(*allowed.j_paper, 2 / 0.15, 1e-9) << "N passed / time of the last crossing";
-  EXPECT_FALSE(record({"run.stranded_max=1"}, EndReason::time_limit).j_paper) << "a run cut by the time limit";
+  const RunRecord strict = record({"run.stranded_max=0"}, EndReason::permanent_clog);
+  EXPECT_FALSE(strict.j_paper) << "none may stay behind";
+  EXPECT_EQ(strict.regime, Regime::clogged);
+  ASSERT_EQ(strict.clogs.size(), 1u);
+  EXPECT_TRUE(strict.clogs.back().censored);
+  for (EndReason reason : {EndReason::permanent_clog, EndReason::time_limit}) {
+    const RunRecord allowed = record({"run.stranded_max=1"}, reason);
+    ASSERT_TRUE(allowed.j_paper);
+    EXPECT_NEAR(*allowed.j_paper, 2 / 0.15, 1e-9) << "N passed / time of the last crossing";
+    EXPECT_TRUE(allowed.clogs.empty()) << "the wait after an emptied board is not a clog";
+    EXPECT_EQ(allowed.regime, Regime::continuous);
+    ASSERT_EQ(allowed.avalanches.size(), 1u);
+    EXPECT_TRUE(allowed.avalanches.back().censored) << "ended by the end of the discharge, not by a clog";
+  }
+  EXPECT_FALSE(record({"run.stranded_max=0"}, EndReason::time_limit).j_paper);
 }

@@ -430,10 +430,13 @@ TEST(StudyConfirm, RanksCompletePointsFirstAndAppliesConfirmSet) {
   EXPECT_EQ(ranked[1].point, 2);
   EXPECT_EQ(ranked[2].point, 1);
   EXPECT_EQ(ranked[2].runs_with_j, 1);
-  const std::vector<Job> jobs = confirm_jobs(s, ranked);
+  std::vector<Job> jobs = confirm_jobs(s, ranked);
   ASSERT_EQ(jobs.size(), 1u);
   EXPECT_EQ(jobs[0].id.model, "3d");
   EXPECT_EQ(jobs[0].id.point, 0);
+  StudyDef with_baseline = s;
+  with_baseline.report.baseline = "a";  // every point of the baseline series is confirmed
+  EXPECT_EQ(confirm_jobs(with_baseline, ranked).size(), 3u);
   const auto& o = jobs[0].overrides;
   const auto at = [&](const std::string& text) { return std::find(o.begin(), o.end(), text) - o.begin(); };
   EXPECT_LT(at("run.time_limit_s=25"), at("run.time_limit_s=60")) << "the confirm override comes last and wins";
