@@ -163,11 +163,19 @@ def distance_claims(t, pts):
                 t.add("A: dip below J_0 from D = 2.8 to 3.2 cm (IV)", model, "no position run in 28-32 mm",
                       "not testable", "needs a position in 28-32 mm")
             else:
+                # A dip is a drop below J_0 FROM the plateau: the positions before it must flow better.
                 below = [r for r in dip if significantly(r, "significantly below") or never_empties(r)]
-                t.add("A: dip below J_0 from D = 2.8 to 3.2 cm (IV)", model, "; ".join(point_text(r) for r in dip),
-                      "held" if len(below) == len(dip) else "partly held" if below else "not held",
-                      "held if every position in 28-32 mm is significantly below J_0 or never empties "
-                      "(the paper's dip is a few % below J_0 between a plateau and J_0; read the numbers)")
+                before = [num(r, "ratio") for r in plateau if emptied(r) == 1]
+                dip_ratio = min((num(r, "ratio") if emptied(r) == 1 else 0.0) for r in dip)
+                is_drop = bool(before) and min(before) > dip_ratio
+                t.add("A: dip below J_0 from D = 2.8 to 3.2 cm, after the plateau (IV)", model,
+                      "; ".join(point_text(r) for r in dip)
+                      + ("; the plateau positions flow better" if is_drop else
+                         "; no plateau position emptied in every run" if not before else
+                         "; the plateau positions do not flow better"),
+                      "held" if len(below) == len(dip) and is_drop else "not held",
+                      "held if every position in 28-32 mm is significantly below J_0 (or never empties) AND "
+                      "every emptied plateau position (8-28 mm) has a higher J/J_0")
             near40 = in_range(a, 37, 43)
             if not near40:
                 t.add("A: J close to J_0 at D = 4 cm (IV)", model, "no position run in 37-43 mm", "not testable",

@@ -7,9 +7,7 @@
 #include <ostream>
 #include <stdexcept>
 
-#ifndef GAPFLOW_CODE_VERSION
-#define GAPFLOW_CODE_VERSION "unknown"
-#endif
+#include "gapflow_code_version.h"  // generated at every build (studies/CMakeLists.txt)
 
 namespace gapflow {
 
