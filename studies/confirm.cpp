@@ -54,11 +54,15 @@ std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::
 
 std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoint>& ranked) {
   std::set<std::pair<std::string, int>> chosen;
-  for (size_t i = 0; i < ranked.size() && static_cast<int>(i) < study.confirm.top; ++i)
-    chosen.insert({ranked[i].series, ranked[i].point});
-  // The baseline is always confirmed too: J/J_0 of a confirmed point needs J_0 of its own model.
-  for (const RankedPoint& p : ranked)
-    if (p.series == study.report.baseline) chosen.insert({p.series, p.point});
+  // The top candidates (the baseline is not a candidate), and the baseline itself:
+  // J/J_0 of a confirmed point needs J_0 of its own model.
+  int candidates = 0;
+  for (const RankedPoint& p : ranked) {
+    if (p.series == study.report.baseline)
+      chosen.insert({p.series, p.point});
+    else if (candidates < study.confirm.top && ++candidates)
+      chosen.insert({p.series, p.point});
+  }
   StudyDef confirming = study;
   confirming.models = {study.confirm.model};
   confirming.replicates = study.confirm.replicates;

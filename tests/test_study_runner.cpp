@@ -435,8 +435,18 @@ TEST(StudyConfirm, RanksCompletePointsFirstAndAppliesConfirmSet) {
   EXPECT_EQ(jobs[0].id.model, "3d");
   EXPECT_EQ(jobs[0].id.point, 0);
   StudyDef with_baseline = s;
-  with_baseline.report.baseline = "a";  // every point of the baseline series is confirmed
+  with_baseline.report.baseline = "a";  // every point of the baseline series is confirmed, none is a candidate
   EXPECT_EQ(confirm_jobs(with_baseline, ranked).size(), 3u);
+  // The baseline ranked first does not take a candidate's place.
+  const StudyDef two = parse(study_text("replicates = 1\nset = [\"particles.count=20\"]",
+                                        "[[series.sweep]]\nkey = \"bottleneck.gap_mm\"\nvalues = [30, 35]\n"
+                                        "[[series]]\nlabel = \"base\"\nscenario = \"no_obstruction_medium.toml\"\n"
+                                        "[confirm]\ntop = 1\nreplicates = 1\n[report]\nbaseline = \"base\"\n"));
+  std::vector<RankedPoint> order(3);
+  order[0].series = "base", order[1].series = "a", order[1].point = 1, order[2].series = "a";
+  std::set<std::pair<std::string, int>> picked;
+  for (const Job& j : confirm_jobs(two, order)) picked.insert({j.id.series, j.id.point});
+  EXPECT_EQ(picked, (std::set<std::pair<std::string, int>>{{"base", 0}, {"a", 1}}));
   const auto& o = jobs[0].overrides;
   const auto at = [&](const std::string& text) { return std::find(o.begin(), o.end(), text) - o.begin(); };
   EXPECT_LT(at("run.time_limit_s=25"), at("run.time_limit_s=60")) << "the confirm override comes last and wins";
