@@ -181,7 +181,7 @@ def distance_claims(t, pts):
                 t.add("A: J close to J_0 at D = 4 cm (IV)", model, "no position run in 37-43 mm", "not testable",
                       "needs a position in 37-43 mm")
             else:
-                r = near40[0]
+                r = min(near40, key=lambda x: abs(num(x, "obstruction.distance_mm") - 40))
                 t.add("A: J close to J_0 at D = 4 cm (IV)", model, point_text(r),
                       "held" if r["verdict"] == "not distinguishable" and emptied(r) == 1 else "not held",
                       "held if the position within 37-43 mm is not distinguishable from J_0")
