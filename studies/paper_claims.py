@@ -76,7 +76,9 @@ def point_text(r):
     d = num(r, "obstruction.distance_mm")
     e = emptied(r)
     if e < 1:
-        return f"D = {fmt(d)} mm: emptied in {int(num(r, 'J_paper_n'))} of {int(num(r, 'n_runs'))} runs"
+        passed = num(r, "mean_passed_fraction")
+        return (f"D = {fmt(d)} mm: emptied in {int(num(r, 'J_paper_n'))} of {int(num(r, 'n_runs'))} runs"
+                + (f" ({100 * passed:.0f} % of the spheres passed on average)" if math.isfinite(passed) else ""))
     return f"D = {fmt(d)} mm: J/J_0 = {ratio_text(r)} ({r['verdict']})"
 
 

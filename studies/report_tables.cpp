@@ -251,6 +251,7 @@ CsvRow csv_row(const ReportData& data, const ReportPoint& p, std::vector<std::st
   row.num("d_mm", p.d_mm);
   row.count("n_runs", s.n_runs);
   row.num("all_passed_fraction", s.all_passed_fraction);
+  row.num("mean_passed_fraction", s.mean_passed_fraction);  // how far a board that never emptied got
   j_columns(row, "J_paper", s.j_paper, s.j_star_factor);
   j_columns(row, "J_flowing", s.j_flowing, s.j_star_factor);
   j_columns(row, "J_mid", s.j_mid, s.j_star_factor);

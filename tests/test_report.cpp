@@ -176,6 +176,7 @@ TEST_F(ReportTiny, PointsCsvHasOneRowPerPointWithEveryColumn) {
                            "d_mm",
                            "n_runs",
                            "all_passed_fraction",
+                           "mean_passed_fraction",
                            "J_paper_mean",
                            "J_paper_t_lo",
                            "J_paper_t_hi",
@@ -217,7 +218,12 @@ TEST_F(ReportTiny, PointsCsvHasOneRowPerPointWithEveryColumn) {
   EXPECT_EQ(csv.at(3, "plane.incline_deg"), "6");
   EXPECT_NEAR(std::stod(csv.at(0, "W_over_d")), 19.4 / 7.75, 1e-9);
   EXPECT_NEAR(std::stod(csv.at(0, "d_mm")), 7.75, 1e-9);
-  for (std::size_t r = 0; r < 6; ++r) EXPECT_EQ(csv.at(r, "n_runs"), "2") << r;
+  for (std::size_t r = 0; r < 6; ++r) {
+    EXPECT_EQ(csv.at(r, "n_runs"), "2") << r;
+    const double passed = std::stod(csv.at(r, "mean_passed_fraction")), all = std::stod(csv.at(r, "all_passed_fraction"));
+    EXPECT_TRUE(passed >= 0 && passed <= 1) << r;
+    if (all == 1) EXPECT_DOUBLE_EQ(passed, 1.0) << r;  // every run emptied: every sphere passed
+  }
   // The tables went to stdout too.
   EXPECT_NE(stdout_text.find("series 'incline', model 2d"), std::string::npos) << stdout_text;
 }
