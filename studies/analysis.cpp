@@ -129,8 +129,11 @@ void fill_identity_and_counts(const std::vector<RunRecord>& runs, PointStatistic
   }
   std::vector<double> all_passed, passed_fraction, sim, wall;
   for (const RunRecord& r : runs) {
-    all_passed.push_back(r.particles > 0 && r.passed == r.particles ? 1.0 : 0.0);
-    passed_fraction.push_back(r.particles > 0 ? static_cast<double>(r.passed) / r.particles : 0.0);
+    // With re-injection `passed` counts crossings (a sphere can cross again): no discharge to measure.
+    if (r.reinjected == 0) {
+      all_passed.push_back(r.particles > 0 && r.passed == r.particles ? 1.0 : 0.0);
+      passed_fraction.push_back(r.particles > 0 ? static_cast<double>(r.passed) / r.particles : 0.0);
+    }
     sim.push_back(r.sim_time_s);
     wall.push_back(r.wall_time_s);
     p.escaped_total += r.escaped;

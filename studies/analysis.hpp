@@ -90,8 +90,8 @@ struct PointStatistics {
   double w_over_d = kNaN, distance_over_d = kNaN;  // W/d and D/d (nominal d) of the first run
   double j_star_factor = kNaN;      // sqrt(d/g), g = 9.81 m/s^2: multiply a J (1/s) to get J*
 
-  double all_passed_fraction = kNaN;   // runs in which every particle passed
-  double mean_passed_fraction = kNaN;  // mean of passed/N over runs
+  double all_passed_fraction = kNaN;   // share of runs in which every particle passed (NaN: all runs re-injected)
+  double mean_passed_fraction = kNaN;  // mean of passed/N over runs without re-injection (NaN if none)
   long escaped_total = 0;              // must be 0
   int max_conservation_error = 0;      // must be 0
 

@@ -58,10 +58,12 @@ std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoi
   // J/J_0 of a confirmed point needs J_0 of its own model.
   int candidates = 0;
   for (const RankedPoint& p : ranked) {
-    if (p.series == study.report.baseline)
+    if (p.series == study.report.baseline) {
       chosen.insert({p.series, p.point});
-    else if (candidates < study.confirm.top && ++candidates)
+    } else if (candidates < study.confirm.top) {
       chosen.insert({p.series, p.point});
+      ++candidates;
+    }
   }
   StudyDef confirming = study;
   confirming.models = {study.confirm.model};

@@ -147,6 +147,21 @@ TEST(Regime, FractionsAndLabel) {
   EXPECT_EQ(g.label, "mixed");  // 2 / 1 / 1: no majority
 }
 
+// passed/N describes a discharge only without re-injection, where `passed` counts
+// crossings and can equal (or pass) N by chance.
+TEST(AnalyzePoint, PassedFractionsLeaveOutReinjectedRuns) {
+  RunRecord emptied = record_from({0.5, 1.0, 1.5, 2.0}, 4, 2.5);
+  RunRecord half = record_from({0.5, 1.0}, 4, 2.5);
+  RunRecord reinjected = record_from({0.5, 1.0, 1.5, 2.0}, 4, 2.5);
+  reinjected.reinjected = 4;
+  const PointStatistics p = analyze_point({emptied, half, reinjected});
+  EXPECT_DOUBLE_EQ(p.all_passed_fraction, 0.5);
+  EXPECT_DOUBLE_EQ(p.mean_passed_fraction, 0.75);
+  const PointStatistics only = analyze_point({reinjected});
+  EXPECT_TRUE(std::isnan(only.all_passed_fraction));
+  EXPECT_TRUE(std::isnan(only.mean_passed_fraction));
+}
+
 TEST(AnalyzePoint, GathersEverythingAndComparesToABaseline) {
   // Baseline: continuous runs with period ~0.05 s; "obstruction": period ~0.04 s (25 % faster).
   RandomStream rs(47);
