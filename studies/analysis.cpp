@@ -144,6 +144,10 @@ void fill_identity_and_counts(const std::vector<RunRecord>& runs, PointStatistic
   }
   p.all_passed_fraction = mean_or_nan(all_passed);
   p.mean_passed_fraction = mean_or_nan(passed_fraction);
+  if (!passed_fraction.empty()) {
+    const auto [lo, hi] = std::minmax_element(passed_fraction.begin(), passed_fraction.end());
+    p.min_passed_fraction = *lo, p.max_passed_fraction = *hi;
+  }
   p.mean_sim_time_s = mean_or_nan(sim);
   p.mean_wall_time_s = mean_or_nan(wall);
 }

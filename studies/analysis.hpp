@@ -92,6 +92,7 @@ struct PointStatistics {
 
   double all_passed_fraction = kNaN;   // share of runs in which every particle passed (NaN: all runs re-injected)
   double mean_passed_fraction = kNaN;  // mean of passed/N over runs without re-injection (NaN if none)
+  double min_passed_fraction = kNaN, max_passed_fraction = kNaN;  // their range over those runs
   long escaped_total = 0;              // must be 0
   int max_conservation_error = 0;      // must be 0
 

@@ -36,11 +36,13 @@ def nums(vs):
 
 
 def error_bars(centre, lo, hi):
-    """Asymmetric error bars [below, above]; zero where the interval is unknown."""
+    """Asymmetric error bars [below, above]; zero where the interval is unknown.
+
+    Clamped at 0: a mean of equal values can round a hair outside their range."""
     if not lo or not hi:
         return None
-    below = [c - l if math.isfinite(c - l) else 0.0 for c, l in zip(centre, lo)]
-    above = [h - c if math.isfinite(h - c) else 0.0 for c, h in zip(centre, hi)]
+    below = [max(0.0, c - l) if math.isfinite(c - l) else 0.0 for c, l in zip(centre, lo)]
+    above = [max(0.0, h - c) if math.isfinite(h - c) else 0.0 for c, h in zip(centre, hi)]
     return [below, above]
 
 

@@ -183,9 +183,12 @@ struct PlotFigure {
 std::string plot_spec_json(const std::vector<PlotFigure>& figures);
 
 // J* against each series' x axis (one figure per x quantity), baseline bands;
+// the share discharged against the same axes when some run did not empty the board;
 // the clogging plot ln(<s>+1) vs (W/d)^2 when avalanche data exist.
 std::vector<PlotFigure> generic_figures(const ReportData& data, JKind j);
 std::string j_star_figure_file(const std::string& x_name);
+// passed/N when the run ended, per series and model (drawn when some run left spheres upstream).
+std::string discharge_figure_file(const std::string& x_name);
 
 // A Python 3 interpreter with matplotlib: $GAPFLOW_PYTHON, python3 on PATH, /usr/bin/python3.
 std::optional<std::string> find_python_with_matplotlib();

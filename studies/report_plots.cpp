@@ -86,11 +86,21 @@ std::string plot_spec_json(const std::vector<PlotFigure>& figures) {
 
 // ---------------------------------------------------------------- generic figures
 
-std::string j_star_figure_file(const std::string& x_name) {
+namespace {
+
+// "W/d" -> "W_over_d"; any other character that is not a letter, digit or '_' -> '_'.
+std::string x_file_part(const std::string& x_name) {
   std::string s = x_name == "W/d" ? "W_over_d" : x_name == "D/d" ? "D_over_d" : x_name;
   std::replace_if(
       s.begin(), s.end(), [](char c) { return !std::isalnum(static_cast<unsigned char>(c)) && c != '_'; }, '_');
-  return "j_star_vs_" + s + ".png";
+  return s;
+}
+
+}  // namespace
+
+std::string j_star_figure_file(const std::string& x_name) { return "j_star_vs_" + x_file_part(x_name) + ".png"; }
+std::string discharge_figure_file(const std::string& x_name) {
+  return "discharged_vs_" + x_file_part(x_name) + ".png";
 }
 
 namespace {
@@ -131,6 +141,33 @@ std::vector<PlotBand> baseline_bands(const ReportData& data, JKind j) {
   return out;
 }
 
+// Share of the board through the gap when the run ended, against the series' x: the
+// only picture of the points where no run emptied the board (no J_paper to draw).
+PlotLine discharge_line(const ReportData& data, const std::string& series, const std::string& model,
+                        const XAxis& x) {
+  PlotLine l;
+  l.label = fmt::format("{} ({})", series, model_name(model));
+  l.model = model;
+  auto pts = points_of(data, series, model);
+  std::stable_sort(pts.begin(), pts.end(),
+                   [&](const ReportPoint* a, const ReportPoint* b) { return x_value(*a, x) < x_value(*b, x); });
+  for (const ReportPoint* p : pts) {
+    if (!std::isfinite(p->stats.mean_passed_fraction) || !std::isfinite(x_value(*p, x))) continue;
+    l.x.push_back(x_value(*p, x));
+    l.y.push_back(p->stats.mean_passed_fraction);
+    l.ylo.push_back(p->stats.min_passed_fraction);
+    l.yhi.push_back(p->stats.max_passed_fraction);
+  }
+  return l;
+}
+
+// Some run ended (time limit or a permanent clog) with spheres still upstream.
+bool some_board_not_emptied(const ReportData& data) {
+  return std::any_of(data.points.begin(), data.points.end(), [](const ReportPoint& p) {
+    return std::isfinite(p.stats.mean_passed_fraction) && p.stats.mean_passed_fraction < 1.0;
+  });
+}
+
 bool has_avalanche_data(const ReportData& data) {
   return std::any_of(data.points.begin(), data.points.end(),
                      [](const ReportPoint& p) { return p.stats.avalanches.size.n_uncensored > 0; });
@@ -149,6 +186,29 @@ PlotFigure clogging_figure(const ReportData& data) {
     if (!l.x.empty()) f.lines.push_back(std::move(l));
   }
   return f;
+}
+
+void add_discharge_figures(const ReportData& data, std::vector<PlotFigure>& figures) {
+  const std::size_t first = figures.size();
+  for (const auto& [series, model] : series_models(data)) {
+    const XAxis x = x_axis_of(data, series);
+    if (!x.valid()) continue;
+    const std::string file = discharge_figure_file(x.name);
+    auto it = std::find_if(figures.begin() + static_cast<std::ptrdiff_t>(first), figures.end(),
+                           [&](const PlotFigure& f) { return f.file == file; });
+    if (it == figures.end()) {
+      figures.push_back({file,
+                         fmt::format("Share of the spheres through the gap when the run ended, against {}", x.name),
+                         x.name,
+                         "passed / N  (mean; bars: lowest and highest run)",
+                         {},
+                         {},
+                         false});
+      it = figures.end() - 1;
+    }
+    PlotLine l = discharge_line(data, series, model, x);
+    if (!l.x.empty()) it->lines.push_back(std::move(l));
+  }
 }
 
 }  // namespace
@@ -176,6 +236,7 @@ std::vector<PlotFigure> generic_figures(const ReportData& data, JKind j) {
     PlotLine l = j_star_line(data, series, model, x, j);
     if (!l.x.empty()) it->lines.push_back(std::move(l));
   }
+  if (some_board_not_emptied(data)) add_discharge_figures(data, figures);
   if (has_avalanche_data(data)) figures.push_back(clogging_figure(data));
   return figures;
 }

@@ -222,7 +222,9 @@ TEST_F(ReportTiny, PointsCsvHasOneRowPerPointWithEveryColumn) {
     EXPECT_EQ(csv.at(r, "n_runs"), "2") << r;
     const double passed = std::stod(csv.at(r, "mean_passed_fraction")), all = std::stod(csv.at(r, "all_passed_fraction"));
     EXPECT_TRUE(passed >= 0 && passed <= 1) << r;
-    if (all == 1) EXPECT_DOUBLE_EQ(passed, 1.0) << r;  // every run emptied: every sphere passed
+    if (all == 1) {
+      EXPECT_DOUBLE_EQ(passed, 1.0) << r;  // every run emptied: every sphere passed
+    }
   }
   // The tables went to stdout too.
   EXPECT_NE(stdout_text.find("series 'incline', model 2d"), std::string::npos) << stdout_text;
@@ -265,6 +267,8 @@ TEST(ReportPlots, ScriptDrawsMissingValuesAndAsymmetricBars) {
   f.lines.push_back({"a", "2d", "errorbar", {1, 2, 3}, {1, kNaN, 2}, {0.5, kNaN, 1.9}, {1.5, 3, kNaN}, {}, {}, ""});
   f.lines.push_back({"b", "3d", "markers", {1}, {2}, {}, {}, {0.5}, {1.5}, ""});
   f.lines.push_back({"b fit", "3d", "curve_fixed", {1, 2}, {2, 3}, {}, {}, {}, {}, "b"});
+  // A mean of equal values that rounds a hair above their range (0.1 + 0.2 > 0.3): no negative bar.
+  f.lines.push_back({"c", "2d", "errorbar", {1}, {0.1 + 0.2}, {0.3}, {0.3}, {}, {}, ""});
   write_text(dir / "plots.json", plot_spec_json({f}));
   const int rc = run_program({*python, plot_script_path().string(), (dir / "plots.json").string(), dir.path().string()},
                              dir / "log.txt");
@@ -338,6 +342,20 @@ TEST(ReportFlowVsDistance, FindsThePeakAndTheSignificantRanges) {
   ASSERT_EQ(r.below.size(), 1u);
   EXPECT_NEAR(r.below[0].from, 60.0 / kDiameterMm, 1e-9);
   EXPECT_EQ(r.below[0].n_points, 1u);
+
+  // The clogged point has no J to draw: the discharge figure shows how far its runs got (40 of 100).
+  const auto figures = generic_figures(data, JKind::paper);
+  const auto discharged = std::find_if(figures.begin(), figures.end(),
+                                       [](const PlotFigure& f) { return f.file == "discharged_vs_D_over_d.png"; });
+  ASSERT_NE(discharged, figures.end());
+  ASSERT_EQ(discharged->lines.size(), 1u) << "the baseline has no distance axis";
+  const PlotLine& line = discharged->lines[0];
+  ASSERT_EQ(line.y.size(), 9u);
+  EXPECT_DOUBLE_EQ(line.y[0], 1.0);
+  EXPECT_NEAR(line.x[8], 90.0 / kDiameterMm, 1e-9);
+  EXPECT_DOUBLE_EQ(line.y[8], 0.4);
+  EXPECT_DOUBLE_EQ(line.ylo[8], 0.4);
+  EXPECT_DOUBLE_EQ(line.yhi[8], 0.4);
 
   // The whole report on the same store: ratios in points.csv, n/a for the clogged point, the section.
   std::ostringstream out, log;
