@@ -62,9 +62,11 @@ class CancelOnSignal {
   struct sigaction old_int_ {}, old_term_ {};
 };
 
+// --quick has its own store: its screen may confirm other points than the full
+// study's, and those must not pass for the full study's confirmation.
 std::filesystem::path db_path(const StudyCommands::Options& o, const StudyDef& study) {
   if (!o.db.empty()) return o.db;
-  return std::filesystem::path("results") / study.name / "runs.sqlite";
+  return std::filesystem::path("results") / (o.quick ? study.name + "-quick" : study.name) / "runs.sqlite";
 }
 
 void print_dry_run(const StudyDef& study, const std::vector<Job>& jobs, const std::filesystem::path& db) {
@@ -118,6 +120,8 @@ int cmd_study(const StudyCommands::Options& o) {
     return 0;
   }
   Store store(db);
+  // The report reads the study's [report] settings from the store (gapflow report RESULTS).
+  if (const auto text = read_text_file(o.study_file)) store.record_study_file(study.name, o.study_file, *text);
   std::cerr << fmt::format("study '{}'{}: {} jobs on {} worker threads, store {}\n", study.name,
                            o.quick ? " (quick)" : "", jobs.size(), o.jobs, db.string());
   g_cancel.store(false);
@@ -164,7 +168,9 @@ StudyCommands::StudyCommands(CLI::App& app) : o_(std::make_unique<Options>()) {
   o.study->add_flag("--quick", o.quick, "Use the study's [quick] settings (fewer replicates, models, values)");
   o.study->add_option("--jobs", o.jobs, "Worker threads (default: all cores; results do not depend on it)")
       ->check(CLI::Range(1, 1024));
-  o.study->add_option("--db", o.db, "Results store (default: results/<study name>/runs.sqlite)");
+  o.study->add_option("--db", o.db,
+                      "Results store (default: results/<study name>/runs.sqlite; with --quick "
+                      "results/<study name>-quick/runs.sqlite)");
   o.study->add_flag("--dry-run", o.dry_run, "Print the job count per series and model, and exit");
 
   o.export_cmd = app.add_subcommand("export", "Export one table of a study's results store as CSV");

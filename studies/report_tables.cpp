@@ -81,7 +81,6 @@ std::string render_markdown(const TextTable& t) {
 
 // ---------------------------------------------------------------- per-point tables
 
-namespace {}  // namespace
 
 std::string fmt_mean_ci(const MeanCI& m, int digits) {
   if (m.n == 0) return "n/a";
@@ -93,6 +92,24 @@ namespace {
 
 std::string point_name(const ReportPoint& p) { return p.point_label.empty() ? "(single point)" : p.point_label; }
 
+// The chosen J three ways, side by side (the paper drops runs beyond 2 sigma; we
+// never do it silently): mean with its bootstrap interval, median, 2-sigma-rule mean.
+std::vector<std::string> j_three_ways(const SampleStatistics& s) {
+  if (s.t.n == 0) return {"n/a", "n/a", "n/a"};
+  const std::string mean = s.t.n == 1 ? fmt_num(s.t.mean, 4) + " (1 run)"
+                                      : fmt_num(s.t.mean, 4) + " " + fmt_interval(s.bootstrap, 4);
+  const std::string clipped =
+      fmt_num(s.clipped.kept.mean, 4) + (s.clipped.dropped > 0 ? fmt::format(" ({} dropped)", s.clipped.dropped) : "");
+  return {mean, fmt_num(s.median, 4), clipped};
+}
+
+std::vector<JKind> other_kinds(JKind j) {
+  std::vector<JKind> out;
+  for (JKind k : {JKind::paper, JKind::flowing, JKind::mid})
+    if (k != j) out.push_back(k);
+  return out;
+}
+
 std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_baseline) {
   const PointStatistics& s = p.stats;
   const CensoredMean& av = s.avalanches.size;
@@ -102,14 +119,15 @@ std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_base
       fmt_num(s.distance_over_d, 3),
       fmt::format("{}", s.n_runs),
       fmt_num(s.all_passed_fraction, 3),
-      fmt_mean_ci(mean_ci(s.j_paper.t)),
-      fmt_mean_ci(mean_ci(s.j_flowing.t)),
-      fmt_mean_ci(mean_ci(s.j_mid.t)),
-      fmt_mean_ci(j_star(s, j)),
-      av.n_uncensored > 0 ? fmt_num(av.mean, 3) + " " + fmt_interval(av.ci95, 3) : "n/a",
-      fmt::format("{}", s.clogs.n),
-      s.regime.label,
   };
+  for (std::string& cell : j_three_ways(j_stats(s, j))) row.push_back(std::move(cell));
+  for (JKind k : other_kinds(j)) row.push_back(fmt_mean_ci(mean_ci(j_stats(s, k).t)));
+  row.insert(row.end(), {
+                            fmt_mean_ci(j_star(s, j)),
+                            av.n_uncensored > 0 ? fmt_num(av.mean, 3) + " " + fmt_interval(av.ci95, 3) : "n/a",
+                            fmt::format("{}", s.clogs.n),
+                            s.regime.label,
+                        });
   if (with_baseline) {
     if (p.vs_baseline && std::isfinite(p.vs_baseline->ratio)) {
       const RatioComparison& r = *p.vs_baseline;
@@ -123,6 +141,23 @@ std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_base
   return row;
 }
 
+std::vector<std::string> point_header(JKind j, bool with_baseline) {
+  const std::string name = to_string(j);
+  std::vector<std::string> h{"point",
+                             "W/d",
+                             "D/d",
+                             "runs",
+                             "all passed",
+                             name + " /s mean [bootstrap 95%]",
+                             name + " median",
+                             name + " 2-sigma rule",
+                             };
+  for (JKind k : other_kinds(j)) h.push_back(std::string(to_string(k)) + " /s [t 95%]");
+  h.insert(h.end(), {name + "* [t 95%]", "<s> [95% CI]", "clogs", "regime"});
+  if (with_baseline) h.insert(h.end(), {"J/J_0 [95% CI]", "verdict"});
+  return h;
+}
+
 }  // namespace
 
 std::vector<TextTable> point_tables(const ReportData& data, JKind j) {
@@ -131,11 +166,7 @@ std::vector<TextTable> point_tables(const ReportData& data, JKind j) {
   for (const auto& [series, model] : series_models(data)) {
     TextTable t;
     t.title = fmt::format("series '{}', model {}", series, model);
-    t.header = {"point",        "W/d",        "D/d",
-                "runs",         "all passed", "J_paper /s [95% CI]",
-                "J_flowing /s", "J_mid /s",   std::string(to_string(j)) + "* [95% CI]",
-                "<s> [95% CI]", "clogs",      "regime"};
-    if (with_baseline) t.header.insert(t.header.end(), {"J/J_0 [95% CI]", "verdict"});
+    t.header = point_header(j, with_baseline);
     const bool ref = !data.study.report.baseline.empty() && series == data.study.report.baseline;
     for (const ReportPoint* p : points_of(data, series, model))
       t.rows.push_back(point_row(*p, j, with_baseline && !ref));

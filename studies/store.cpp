@@ -53,6 +53,13 @@ CREATE TABLE IF NOT EXISTS clogs (
 );
 )sql";
 
+// Added to schema version 1 later: created when first written, so older stores stay readable.
+constexpr const char* kStudyFilesSchema = R"sql(
+CREATE TABLE IF NOT EXISTS study_files (
+  study TEXT PRIMARY KEY, source TEXT NOT NULL, text TEXT NOT NULL, recorded_at TEXT NOT NULL
+);
+)sql";
+
 [[noreturn]] void fail(sqlite3* db, const std::string& what) {
   throw std::runtime_error(fmt::format("results store: {}: {}", what, db ? sqlite3_errmsg(db) : "out of memory"));
 }
@@ -134,6 +141,12 @@ class Statement {
   sqlite3* db_;
   sqlite3_stmt* s_ = nullptr;
 };
+
+bool has_table(sqlite3* db, const std::string& name) {
+  Statement s(db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?");
+  s.bind(1, name);
+  return s.step();
+}
 
 std::string hex(std::uint64_t v) { return fmt::format("{:016x}", v); }
 std::uint64_t from_hex(const std::string& s) { return std::stoull(s, nullptr, 16); }
@@ -239,7 +252,7 @@ Store::Store(const std::filesystem::path& file) {
 Store::~Store() { sqlite3_close(db_); }
 
 const std::vector<std::string>& Store::tables() {
-  static const std::vector<std::string> names{"runs", "crossings", "avalanches", "clogs"};
+  static const std::vector<std::string> names{"runs", "crossings", "avalanches", "clogs", "study_files"};
   return names;
 }
 
@@ -327,11 +340,32 @@ std::vector<StoredRun> Store::load(const std::optional<std::string>& study) cons
   return out;
 }
 
+void Store::record_study_file(const std::string& study, const std::string& source, const std::string& text) {
+  std::lock_guard lock(mutex_);
+  exec(db_, kStudyFilesSchema);
+  Statement s(db_,
+              "INSERT OR REPLACE INTO study_files (study, source, text, recorded_at) "
+              "VALUES (?, ?, ?, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'))");
+  s.bind_all(study, source, text).run();
+}
+
+std::vector<StudyFileRecord> Store::study_files() const {
+  std::lock_guard lock(mutex_);
+  std::vector<StudyFileRecord> out;
+  if (!has_table(db_, "study_files")) return out;  // a store written before the table existed
+  Statement s(db_, "SELECT study, source, text, recorded_at FROM study_files ORDER BY study");
+  while (s.step()) out.push_back({s.text(0), s.text(1), s.text(2), s.text(3)});
+  return out;
+}
+
 void Store::export_csv(const std::string& table, std::ostream& out) const {
   const auto& names = tables();
   if (std::find(names.begin(), names.end(), table) == names.end())
-    throw std::invalid_argument(fmt::format("table '{}' is not one of: runs, crossings, avalanches, clogs", table));
+    throw std::invalid_argument(
+        fmt::format("table '{}' is not one of: runs, crossings, avalanches, clogs, study_files", table));
   std::lock_guard lock(mutex_);
+  if (!has_table(db_, table))
+    throw std::invalid_argument(fmt::format("this store has no table '{}' (written before it existed)", table));
   Statement s(db_, fmt::format("SELECT * FROM {} ORDER BY rowid", table).c_str());
   for (int c = 0; c < s.columns(); ++c) out << (c ? "," : "") << s.name(c);
   out << "\n";

@@ -5,6 +5,8 @@
 //   avalanches  (job_key, idx, size, t_start_s, t_end_s, first, censored)
 //   clogs       (job_key, idx, t_start_s, duration_s, censored)
 //
+//   study_files (study, source, text, recorded_at)            the study file as run
+//
 // A run and its child rows are written in one transaction: after a crash or
 // kill -9 a job is either completely stored or absent, so resuming = running
 // the jobs whose key is not in `runs`. Safe to call from several threads (one
@@ -33,6 +35,15 @@ struct StoredRun {
   std::string finished_at;  // UTC, ISO 8601
 };
 
+// The study file a study was run from, kept in its store so that `gapflow report`
+// reads the [report] settings (baseline, analyses, J kind) the runs were made for.
+struct StudyFileRecord {
+  std::string study;        // the study's name
+  std::string source;       // the path it was read from
+  std::string text;         // its whole text
+  std::string recorded_at;  // UTC, ISO 8601
+};
+
 // What this build writes into runs.code_version (git describe at configure time).
 const char* code_version();
 
@@ -54,9 +65,13 @@ class Store {
   // Every stored run (of one study, when given), in job-key order.
   std::vector<StoredRun> load(const std::optional<std::string>& study = std::nullopt) const;
 
+  // Keep (or replace) the study file of `study`: the last one run is the one recorded.
+  void record_study_file(const std::string& study, const std::string& source, const std::string& text);
+  std::vector<StudyFileRecord> study_files() const;  // by study name
+
   // One table as CSV (header row; NULL = empty field; reals round-trip exactly).
   void export_csv(const std::string& table, std::ostream& out) const;
-  static const std::vector<std::string>& tables();  // runs, crossings, avalanches, clogs
+  static const std::vector<std::string>& tables();  // runs, crossings, avalanches, clogs, study_files
 
  private:
   sqlite3* db_ = nullptr;

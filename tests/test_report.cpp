@@ -379,6 +379,19 @@ TEST(ReportFlowVsDistance, FindsThePeakAndTheSignificantRanges) {
             std::string::npos)
       << md;
   EXPECT_NE(out.str().find("n/a"), std::string::npos) << "the clogged point prints n/a";
+
+  // Without --study: a bare report and a warning, until the store records the study file.
+  req.study.reset();
+  std::ostringstream out2, log2;
+  const ReportOutcome bare = make_report(req, out2, log2);
+  EXPECT_EQ(read_text(bare.markdown).find("## Analysis:"), std::string::npos);
+  EXPECT_NE(log2.str().find("give --study"), std::string::npos) << log2.str();
+  Store(dir / "runs.sqlite").record_study_file("synthetic", study.string(), read_text(study));
+  std::ostringstream out3, log3;
+  const ReportOutcome recorded = make_report(req, out3, log3);
+  EXPECT_NE(read_text(recorded.markdown).find("## Analysis: Flow rate against the obstruction distance"),
+            std::string::npos);
+  EXPECT_NE(log3.str().find("using the study file recorded in the store"), std::string::npos) << log3.str();
 }
 
 // ------------------------------------------------------------------ models

@@ -1,6 +1,7 @@
 // The study runner and its results store: study loader, job expansion, SQLite
 // round trip, determinism across worker counts, resume after kill -9, Ctrl-C.
 // Simulations use studies/examples/tiny.toml (12 runs of 60 spheres, ~0.2 s each).
+#include "common/text_file.hpp"
 #include "studies/confirm.hpp"
 #include "studies/jobs.hpp"
 #include "studies/runner.hpp"
@@ -63,13 +64,14 @@ ScenarioError study_error(const std::string& text) {
   return ScenarioError({}, "", "", "");
 }
 
-// Every row of every table as text, sorted; wall_time_s and finished_at left out
+// Every row of every run table as text, sorted; wall_time_s and finished_at left out
 // (they are the only columns that may differ between two runs of the same jobs).
 std::vector<std::string> dump(const fs::path& db_file) {
   sqlite3* db = nullptr;
   EXPECT_EQ(sqlite3_open_v2(db_file.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK) << db_file;
   std::vector<std::string> rows;
   for (const std::string& table : Store::tables()) {
+    if (table == "study_files") continue;  // which file was run and when: not a run record
     sqlite3_stmt* s = nullptr;
     EXPECT_EQ(sqlite3_prepare_v2(db, ("SELECT * FROM " + table).c_str(), -1, &s, nullptr), SQLITE_OK);
     while (sqlite3_step(s) == SQLITE_ROW) {
@@ -110,11 +112,10 @@ int stored_runs(const fs::path& db_file) {
   return n;
 }
 
-// `gapflow study` as a child process (stdout and stderr to `log`).
-pid_t spawn_study(const fs::path& db, const fs::path& log, int jobs) {
+// `gapflow ARGS...` as a child process (stdout and stderr to `log`).
+pid_t spawn_gapflow(std::vector<std::string> args, const fs::path& log) {
   const std::string binary = GAPFLOW_BINARY_DIR "/app/gapflow";
-  std::vector<std::string> args{binary, "study", tiny_study().string(), "--db", db.string(), "--jobs",
-                                std::to_string(jobs)};
+  args.insert(args.begin(), binary);
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -127,6 +128,11 @@ pid_t spawn_study(const fs::path& db, const fs::path& log, int jobs) {
   posix_spawn_file_actions_destroy(&fa);
   EXPECT_EQ(rc, 0) << "cannot start " << binary;
   return pid;
+}
+
+// `gapflow study` of the tiny study into `db`.
+pid_t spawn_study(const fs::path& db, const fs::path& log, int jobs) {
+  return spawn_gapflow({"study", tiny_study().string(), "--db", db.string(), "--jobs", std::to_string(jobs)}, log);
 }
 
 std::string read_log(const fs::path& log) {
@@ -553,6 +559,23 @@ TEST(StudyStore, ExportsCsvWithQuotingAndNulls) {
   EXPECT_THROW(store.export_csv("runs; DROP TABLE runs", runs), std::invalid_argument);
 }
 
+TEST(StudyStore, KeepsTheLastStudyFileRunAndReadsStoresWithoutOne) {
+  TempDir dir;
+  Store store(dir / "runs.sqlite");
+  EXPECT_TRUE(store.study_files().empty()) << "a store without the table (as written before it existed)";
+  std::ostringstream csv;
+  EXPECT_THROW(store.export_csv("study_files", csv), std::invalid_argument);
+  store.record_study_file("s", "a/s.toml", "[study]\nname = \"s\"\nreplicates = 3\n");
+  store.record_study_file("s", "b/s.toml", "[study]\nname = \"s\"\nreplicates = 5\n");
+  const std::vector<StudyFileRecord> files = store.study_files();
+  ASSERT_EQ(files.size(), 1u) << "one per study: the last one run";
+  EXPECT_EQ(files[0].source, "b/s.toml");
+  EXPECT_NE(files[0].text.find("replicates = 5"), std::string::npos);
+  EXPECT_FALSE(files[0].recorded_at.empty());
+  store.export_csv("study_files", csv);
+  EXPECT_EQ(csv.str().rfind("study,source,text,recorded_at\n", 0), 0u) << csv.str();
+}
+
 // ------------------------------------------------------------------ runner (no simulation)
 
 TEST(StudyRunner, FailedJobIsReportedAndOthersContinue) {
@@ -653,6 +676,20 @@ TEST(StudyRunner, ResumeAfterKill9EqualsAnUninterruptedRun) {
   std::set<std::string> keys;
   for (const StoredRun& r : Store(killed).load()) EXPECT_TRUE(keys.insert(r.id.key).second) << r.id.key;
   EXPECT_EQ(keys.size(), 12u);
+  // `gapflow study` recorded the study file it ran, for `gapflow report` to read.
+  const std::vector<StudyFileRecord> files = Store(killed).study_files();
+  ASSERT_EQ(files.size(), 1u);
+  EXPECT_EQ(files[0].study, "tiny");
+  EXPECT_EQ(files[0].text, *read_text_file(tiny_study()));
+}
+
+TEST(StudyRunner, QuickHasItsOwnStore) {
+  TempDir dir;
+  const fs::path log = dir / "log.txt";
+  EXPECT_EQ(wait_exit(spawn_gapflow({"study", tiny_study().string(), "--quick", "--dry-run"}, log)), 0);
+  EXPECT_NE(read_log(log).find("store results/tiny-quick/runs.sqlite"), std::string::npos) << read_log(log);
+  EXPECT_EQ(wait_exit(spawn_gapflow({"study", tiny_study().string(), "--dry-run"}, log)), 0);
+  EXPECT_NE(read_log(log).find("store results/tiny/runs.sqlite"), std::string::npos) << read_log(log);
 }
 
 TEST(StudyRunner, SigintExits130AndStoresOnlyCompleteRuns) {
