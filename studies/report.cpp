@@ -401,7 +401,9 @@ std::vector<ExperimentSection> experiment_sections(const ReportData& data, const
         out.push_back(clogging_section(data, opt));
         break;
       case ReportKind::models:
-        out.push_back(models_section(data, opt));
+        // The screen -> confirm section holds the 2D/3D comparison already: once is enough.
+        if (std::find(opt.kinds.begin(), opt.kinds.end(), ReportKind::screen_confirm) == opt.kinds.end())
+          out.push_back(models_section(data, opt));
         break;
       case ReportKind::screen_confirm:
         out.push_back(screen_confirm_section(data, opt));

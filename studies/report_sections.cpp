@@ -235,13 +235,22 @@ std::vector<std::string> clog_point_row(const ClogSeries& cs, const ClogPoint& c
           regime_text(st.regime)};
 }
 
+// A line through 2 points fits them exactly and has no interval: it is not drawn
+// (as the Beverloo fits without degrees of freedom are not).
+bool drawn(const LineFit& f) { return f.ok && f.n >= 3; }
+
+std::string fit_note(const LineFit& f) {
+  if (!f.ok) return "no fit (fewer than 2 distinct W/d with avalanches)";
+  return drawn(f) ? f.weighting : f.weighting + "; not drawn: 2 points leave no degrees of freedom, no intervals";
+}
+
 PlotLine clog_fit_curve(const ClogSeries& cs) {
   PlotLine l;
   l.label = fmt::format("{} ({}) fit", cs.series, model_name(cs.model));
   l.group = fmt::format("{} ({})", cs.series, model_name(cs.model));
   l.model = cs.model;
   l.style = "curve";
-  if (!cs.fit.ok) return l;
+  if (!drawn(cs.fit)) return l;
   double lo = kNaN, hi = kNaN;
   for (const ClogPoint& c : cs.points)
     if (std::isfinite(c.ln_s1))
@@ -295,7 +304,7 @@ ExperimentSection clogging_section(const ReportData& data, const ReportOptions&)
     fits.rows.push_back({cs.series, model_name(cs.model), fmt_num(cs.fit.slope) + " " + fmt_interval(cs.fit.slope_ci),
                          fmt_num(cs.fit.intercept) + " " + fmt_interval(cs.fit.intercept_ci),
                          fmt_num(cs.fit.chi2_per_dof, 3), fmt::format("{}", cs.fit.n),
-                         cs.fit.ok ? cs.fit.weighting : "no fit (fewer than 2 distinct W/d with avalanches)"});
+                         fit_note(cs.fit)});
     s.overlays["clogging.png"].push_back(clog_fit_curve(cs));
   }
   s.tables.push_back(std::move(pts));
@@ -374,7 +383,12 @@ ExperimentSection screen_confirm_section(const ReportData& data, const ReportOpt
     if (m.j3d.n > 0) confirmed_3d.push_back(m.j3d.mean);
   TextTable t;
   t.title = "Ranks (1 = highest mean J)";
-  t.header = {"series", "point", "rank in the 2D screen", "rank among the confirmed, 2D",
+  t.header = {"series",
+              "point",
+              "rank in the 2D screen",
+              "2D J /s [95% CI]",
+              "rank among the confirmed, 2D",
+              "3D J /s [95% CI]",
               "rank among the confirmed, 3D"};
   std::vector<double> confirmed_2d;
   for (const ModelPair& m : a.pairs)
@@ -383,7 +397,9 @@ ExperimentSection screen_confirm_section(const ReportData& data, const ReportOpt
     const bool both = m.j2d.n > 0 && m.j3d.n > 0;
     t.rows.push_back({m.series, label_or_single(m.point_label),
                       m.j2d.n > 0 ? fmt::format("{}", rank_of(m.j2d.mean, screened)) : "n/a",
+                      fmt_mean_ci(m.j2d),
                       both ? fmt::format("{}", rank_of(m.j2d.mean, confirmed_2d)) : "n/a",
+                      fmt_mean_ci(m.j3d),
                       both ? fmt::format("{}", rank_of(m.j3d.mean, confirmed_3d)) : "n/a"});
   }
   s.paragraphs.insert(s.paragraphs.begin(), fmt::format("{} of the {} points screened in 2D with {} defined were run "

@@ -429,9 +429,12 @@ TEST(ReportModels, IdenticalRecordsGiveRatioOneAndPerfectAgreement) {
 
 // Runs whose avalanches after the first all have size s = 2^k - 1 at W/d = sqrt(k): then
 // ln(<s>+1) = ln 2 (W/d)^2 exactly (the censoring-aware mean of equal completed sizes is s).
-TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
+namespace {
+
+// Clogged runs at (W/d)^2 = 1..gaps whose completed avalanches all have size 2^k - 1.
+std::vector<StoredRun> clogging_runs(int gaps) {
   std::vector<StoredRun> runs;
-  for (int k = 1; k <= 4; ++k)
+  for (int k = 1; k <= gaps; ++k)
     for (int rep = 0; rep < 2; ++rep) {
       StoredRun r;
       r.id.key = fmt::format("{:016x}", 100 * k + rep);
@@ -446,6 +449,13 @@ TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
       r.record.clogs.push_back({1.0, 30.0, true});
       runs.push_back(std::move(r));
     }
+  return runs;
+}
+
+}  // namespace
+
+TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
+  const std::vector<StoredRun> runs = clogging_runs(4);
   StudyInfo info;
   info.report.kinds = {ReportKind::clogging};
   const ReportData data = collect_report_data(runs, info);
@@ -471,6 +481,30 @@ TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
       << render_markdown(sec.tables.at(1));
   // No J_paper anywhere (every run clogged): the tables say n/a and the J* figure has no line.
   EXPECT_NE(render_text(point_tables(data, JKind::paper).at(0)).find("n/a"), std::string::npos);
+}
+
+// The screen -> confirm section holds the 2D/3D comparison: asking for both gives it once.
+TEST(ReportModels, ScreenConfirmAndModelsGiveOneComparison) {
+  StudyInfo info;
+  info.report.kinds = {ReportKind::screen_confirm, ReportKind::models};
+  const ReportData data = collect_report_data(clogging_runs(2), info);
+  const std::vector<ExperimentSection> sections = experiment_sections(data, info.report);
+  ASSERT_EQ(sections.size(), 1u);
+  EXPECT_EQ(sections[0].title, "Screen (2D) and confirmation (3D)");
+  info.report.kinds = {ReportKind::models};
+  EXPECT_EQ(experiment_sections(data, info.report).size(), 1u);
+}
+
+// Two gaps: the line goes through both points exactly, with no interval; it is not drawn.
+TEST(ReportClogging, ALineThroughTwoPointsIsNotDrawn) {
+  StudyInfo info;
+  info.report.kinds = {ReportKind::clogging};
+  const ReportData data = collect_report_data(clogging_runs(2), info);
+  const ExperimentSection sec = clogging_section(data, info.report);
+  ASSERT_EQ(sec.overlays.count("clogging.png"), 1u);
+  EXPECT_TRUE(sec.overlays.at("clogging.png").at(0).x.empty());
+  EXPECT_NE(render_markdown(sec.tables.at(1)).find("not drawn: 2 points"), std::string::npos)
+      << render_markdown(sec.tables.at(1));
 }
 
 // ------------------------------------------------------------------ pieces
