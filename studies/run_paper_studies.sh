@@ -3,12 +3,12 @@
 # write each report. Resumable: run it again after an interruption and finished runs
 # are kept. The wall time of each study (elapsed, this machine) goes to
 # results/<study>/wall_time.txt.
-# Usage: studies/run_paper_studies.sh [STUDY_NAME ...]   (default: all four, in this order)
-#   names: flow_vs_distance flow_vs_gap screen_confirm clogging
+# Usage: studies/run_paper_studies.sh [STUDY_NAME ...]   (default: all of them, in this order)
+#   names: flow_vs_distance flow_vs_gap screen_confirm clogging clogging_long cylinder_peak_3d
 set -euo pipefail
 cd "$(dirname "$0")/.."
 studies=("$@")
-[ ${#studies[@]} -eq 0 ] && studies=(flow_vs_distance flow_vs_gap screen_confirm clogging)
+[ ${#studies[@]} -eq 0 ] && studies=(flow_vs_distance flow_vs_gap screen_confirm clogging clogging_long cylinder_peak_3d)
 for s in "${studies[@]}"; do
   file="studies/paper/$s.toml"
   out="results/$(echo "$s" | tr _ -)"
