@@ -54,6 +54,7 @@ struct ReportOptions {
 // key or bad value is a ScenarioError with file:line:column.
 struct StudyInfo {
   std::filesystem::path file;  // "" when no study file was given
+  std::string recorded_at;     // set when the file's text is the copy recorded in the store (UTC)
   std::string name, description;
   std::optional<int> replicates;
   std::vector<std::string> models;        // as written ("2d", "3d")

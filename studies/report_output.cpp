@@ -41,14 +41,19 @@ std::vector<std::string> series_labels(const ReportData& d) {
   return out;
 }
 
+std::string study_file_text(const StudyInfo& s) {
+  if (s.file.empty()) return " (no study file given)";
+  if (s.recorded_at.empty()) return fmt::format(", file `{}`", s.file.string());
+  return fmt::format(", file `{}` (the copy recorded in the store at {})", s.file.string(), s.recorded_at);
+}
+
 std::string what_was_run(const ReportData& d) {
   const StudyInfo& s = d.study;
   std::string versions;
   for (const auto& [v, n] : d.code_versions)
     versions += fmt::format("{}`{}` ({} runs)", versions.empty() ? "" : ", ", v, n);
   std::string out = "## What was run\n\n";
-  out += fmt::format("- study: `{}`{}\n", s.name,
-                     s.file.empty() ? " (no study file given)" : ", file `" + s.file.string() + "`");
+  out += fmt::format("- study: `{}`{}\n", s.name, study_file_text(s));
   out += fmt::format("- runs: {} in {} points (series x model x point)\n", d.n_runs, d.points.size());
   out += fmt::format("- series: {}\n", joined(series_labels(d)));
   out += fmt::format("- models in the store: {}{}\n", joined(d.models),
@@ -154,7 +159,10 @@ StudyInfo recorded_study_info(const fs::path& db, std::ostream& log) {
   if (files.size() == 1) {
     const StudyFileRecord& f = files.front();
     log << fmt::format("using the study file recorded in the store: {} (recorded {})\n", f.source, f.recorded_at);
-    return parse_study_info(f.text, fmt::format("{} [as recorded in {}]", f.source, db.string()));
+    StudyInfo info = parse_study_info(f.text, fmt::format("{} [as recorded in {}]", f.source, db.string()));
+    info.file = f.source;
+    info.recorded_at = f.recorded_at;
+    return info;
   }
   log << fmt::format(
       "warning: {}: no baseline, no analyses, J_paper; give --study STUDY.toml\n",

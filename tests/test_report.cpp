@@ -389,8 +389,10 @@ TEST(ReportFlowVsDistance, FindsThePeakAndTheSignificantRanges) {
   Store(dir / "runs.sqlite").record_study_file("synthetic", study.string(), read_text(study));
   std::ostringstream out3, log3;
   const ReportOutcome recorded = make_report(req, out3, log3);
-  EXPECT_NE(read_text(recorded.markdown).find("## Analysis: Flow rate against the obstruction distance"),
-            std::string::npos);
+  const std::string recorded_md = read_text(recorded.markdown);
+  EXPECT_NE(recorded_md.find("## Analysis: Flow rate against the obstruction distance"), std::string::npos);
+  EXPECT_NE(recorded_md.find(", file `" + study.string() + "` (the copy recorded in the store at "), std::string::npos)
+      << "the header names the recorded file, not 'no study file given'";
   EXPECT_NE(log3.str().find("using the study file recorded in the store"), std::string::npos) << log3.str();
 }
 
