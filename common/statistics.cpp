@@ -376,6 +376,16 @@ TailCheck geometric_tail_check(const std::vector<int>& sizes, const TailCheckOpt
   return c;
 }
 
+TailCheck geometric_upper_tail_check(const std::vector<int>& sizes, int from, const TailCheckOptions& opt) {
+  from = std::max(from, 1);
+  std::vector<int> excess;
+  for (int s : sizes)
+    if (s >= from) excess.push_back(s - from + 1);
+  TailCheck c = geometric_tail_check(excess, opt);
+  c.from = from;
+  return c;
+}
+
 HillEstimate hill_estimator(std::vector<double> x, double top_fraction) {
   HillEstimate h;
   h.n = x.size();

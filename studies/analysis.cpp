@@ -39,6 +39,9 @@ AvalancheStatistics avalanche_statistics(const std::vector<RunRecord>& runs, con
     }
   a.size = censored_exponential_mean(sizes, censored);
   a.tail = geometric_tail_check(a.sizes, opt);
+  // Threshold at the mean: ~e^-1 of a geometric sample lies above it, enough to test, and
+  // far enough up to leave out the small-size deficit seen in long runs.
+  if (a.tail.mean >= 1) a.upper_tail = geometric_upper_tail_check(a.sizes, static_cast<int>(std::ceil(a.tail.mean)), opt);
   return a;
 }
 

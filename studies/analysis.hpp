@@ -27,6 +27,7 @@ struct AvalancheStatistics {
   std::size_t n_first_excluded = 0; // flagged first, not used below
   CensoredMean size;                // censoring-aware mean size (particles) and its chi-square interval
   TailCheck tail;                   // geometric fit of the UNCENSORED sizes (KS + parametric bootstrap)
+  TailCheck upper_tail;             // the same on the sizes >= ceil(<s>) only: the exponential-TAIL check
   std::vector<int> sizes;           // uncensored sizes used by `tail`
 };
 

@@ -195,6 +195,7 @@ TEST_F(ReportTiny, PointsCsvHasOneRowPerPointWithEveryColumn) {
                            "aval_hi",
                            "aval_n",
                            "aval_tail_p",
+                           "aval_upper_tail_p",
                            "clog_n",
                            "clog_mean_s",
                            "clog_median_s",

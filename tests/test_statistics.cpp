@@ -234,6 +234,32 @@ TEST(TailCheck, AcceptsGeometricSizesAndRejectsUniformSizes) {
   EXPECT_TRUE(few.consistent);
 }
 
+TEST(TailCheck, UpperTailIgnoresTheSmallSizesAndStillRejectsABadTail) {
+  // Sizes with a deficit of 1s (as the long 2D runs show: a clog often re-forms only after
+  // a few spheres) on top of a geometric tail of mean excess 6: the whole-distribution
+  // test rejects, the upper-tail test from the mean does not.
+  RandomStream rs(14);
+  TailCheckOptions opt;
+  opt.resamples = 300;
+  std::vector<int> sizes;
+  for (int i = 0; i < 1500; ++i) {
+    const int s = geometric_sample(rs, 1, 7.0).front();
+    if (s == 1 && rs.uniform() < 0.8) continue;  // 80 % of the 1s never happen
+    sizes.push_back(s);
+  }
+  EXPECT_FALSE(geometric_tail_check(sizes, opt).consistent) << "the deficit of 1s is visible";
+  const TailCheck upper = geometric_upper_tail_check(sizes, 8, opt);
+  EXPECT_EQ(upper.from, 8);
+  EXPECT_EQ(upper.n, static_cast<std::size_t>(std::count_if(sizes.begin(), sizes.end(), [](int s) { return s >= 8; })));
+  EXPECT_TRUE(upper.tested);
+  EXPECT_TRUE(upper.consistent) << "p = " << upper.p_value;
+  EXPECT_NEAR(upper.mean, 7.0, 0.8) << "memoryless: the excess has the same mean";
+  // A tail that is not geometric (uniform sizes 1..30) is still rejected above its mean.
+  std::vector<int> uniform(1500);
+  for (int& s : uniform) s = 1 + static_cast<int>(rs.uniform() * 30);
+  EXPECT_FALSE(geometric_upper_tail_check(uniform, 16, opt).consistent);
+}
+
 TEST(TailCheck, BootstrapPValueIsCalibratedUnderTheNull) {
   // Exponential data with the mean estimated: the parametric bootstrap must reject ~5 %.
   RandomStream rs(13);
