@@ -278,6 +278,42 @@ TEST(ReportPlots, ScriptDrawsMissingValuesAndAsymmetricBars) {
   EXPECT_NE(read_text(dir / "plots.json").find("null"), std::string::npos) << "NaN is written as null";
 }
 
+// studies/paper_claims.py: a significant peak is the best of several positions, so the
+// claim is held only if the re-test with fresh seeds (cylinder-peak-3d) finds it too.
+TEST(PaperClaims, APeakIsHeldOnlyIfItsReTestReproducesIt) {
+  const auto python = find_python_with_matplotlib();
+  if (!python) GTEST_SKIP() << "no python3";
+  TempDir dir;
+  const std::string header =
+      "series,model,n_runs,J_paper_n,J_paper_mean,clog_n,obstruction.distance_mm,D_over_d,d_mm,ratio,ratio_lo,"
+      "ratio_hi,verdict,mean_passed_fraction\n";
+  fs::create_directories(dir / "flow-vs-distance");
+  write_text(dir / "flow-vs-distance" / "points.csv",
+             header + "none,3d,6,6,65.6,0,,0,7.75,,,,,1\n"
+                      "cylinder,3d,6,6,67.8,0,110,14.19,7.75,1.034,1.025,1.043,significantly above,1\n");
+  auto claims_with_retest = [&](const std::string& retest_verdict) {
+    fs::create_directories(dir / "cylinder-peak-3d");
+    write_text(dir / "cylinder-peak-3d" / "points.csv",
+               header + "none,3d,10,10,65.9,0,,0,7.75,,,,,1\n"
+                        "cylinder,3d,10,10,65.9,0,,14.19,7.75,1.0,0.98,1.02," + retest_verdict + ",1\n");
+    const fs::path out = dir / ("claims_" + retest_verdict + ".md");  // run_program appends to its log
+    const int rc = run_program({*python, (fs::path(GAPFLOW_SOURCE_DIR) / "studies" / "paper_claims.py").string(),
+                                dir.path().string()},
+                               out);
+    EXPECT_EQ(rc, 0) << read_text(out);
+    const std::string md = read_text(out);
+    const auto line = md.find("| cylinder: peak above J_0 (waiting room) (IV) | 3d |");
+    EXPECT_NE(line, std::string::npos) << md;
+    return md.substr(line, md.find('\n', line) - line);
+  };
+  const std::string refuted = claims_with_retest("not distinguishable");
+  EXPECT_NE(refuted.find("not reproduced"), std::string::npos) << refuted;
+  EXPECT_NE(refuted.find("**not held**"), std::string::npos) << refuted;
+  const std::string confirmed = claims_with_retest("significantly above");
+  EXPECT_NE(confirmed.find(": reproduced"), std::string::npos) << confirmed;
+  EXPECT_NE(confirmed.find("**held**"), std::string::npos) << confirmed;
+}
+
 TEST_F(ReportTiny, EveryAnalysisKindRunsOnRealDataWithoutCrashing) {
   const std::string study = read_text(*request.study);
   for (const char* kind : {"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"}) {
