@@ -63,6 +63,7 @@ struct ModelPlan {
 
 // [quick]: a cheaper version of the study for a first look.
 struct QuickDef {
+  bool present = false;           // the file has a [quick] table (without one, --quick is an error)
   std::optional<int> replicates;
   std::optional<std::vector<ModelKind>> models;
   int thin = 1;  // keep every thin-th value of each axis (and always the first and the last)

@@ -692,6 +692,18 @@ TEST(StudyRunner, QuickHasItsOwnStore) {
   EXPECT_NE(read_log(log).find("store results/tiny/runs.sqlite"), std::string::npos) << read_log(log);
 }
 
+TEST(StudyRunner, QuickWithoutAQuickTableIsAnError) {
+  TempDir dir;
+  const fs::path study = dir / "no_quick.toml", log = dir / "log.txt";
+  std::ofstream(study) << ("[study]\nname = \"nq\"\n[[series]]\nlabel = \"a\"\nscenario = \"" +
+                        source_path("scenarios/paper/no_obstruction_medium.toml").string() + "\"\n");
+  EXPECT_EQ(wait_exit(spawn_gapflow({"study", study.string(), "--quick", "--dry-run"}, log)), 2);
+  const std::string text = read_log(log);
+  EXPECT_NE(text.find(study.string()), std::string::npos) << text;
+  EXPECT_NE(text.find("no [quick] table"), std::string::npos) << text;
+  EXPECT_EQ(wait_exit(spawn_gapflow({"study", study.string(), "--dry-run"}, log)), 0) << read_log(log);
+}
+
 TEST(StudyRunner, SigintExits130AndStoresOnlyCompleteRuns) {
   TempDir dir;
   const fs::path db = dir / "runs.sqlite", log = dir / "log.txt";
