@@ -83,7 +83,7 @@ ExperimentSection flow_vs_gap_section(const ReportData& data, const ReportOption
       fmt::format("J* = C (W/d - k)^beta, fitted by weighted least squares to "
                   "the per-point mean of {}* = {} sqrt(d/g) "
                   "(weights: standard errors of the means; 95 % intervals from "
-                  "Student t, widened by max(1, chi2/dof)), "
+                  "Student t, widened by sqrt(max(1, chi2/dof))), "
                   "for each series and model, with beta free and with the 2D "
                   "Beverloo value beta = 3/2. "
                   "The law is claimed only over the W/d range each fit used.",
