@@ -107,15 +107,27 @@ namespace {
 
 std::string model_name(const std::string& m) { return m == "2d" ? "2D" : m == "3d" ? "3D" : m; }
 
-PlotLine j_star_line(const ReportData& data, const std::string& series, const std::string& model, const XAxis& x,
-                     JKind j) {
+// An empty line named after its series and model.
+PlotLine series_line(const std::string& series, const std::string& model) {
   PlotLine l;
   l.label = fmt::format("{} ({})", series, model_name(model));
   l.model = model;
+  return l;
+}
+
+// The points of one series and model in increasing x.
+std::vector<const ReportPoint*> points_along(const ReportData& data, const std::string& series,
+                                             const std::string& model, const XAxis& x) {
   auto pts = points_of(data, series, model);
   std::stable_sort(pts.begin(), pts.end(),
                    [&](const ReportPoint* a, const ReportPoint* b) { return x_value(*a, x) < x_value(*b, x); });
-  for (const ReportPoint* p : pts) {
+  return pts;
+}
+
+PlotLine j_star_line(const ReportData& data, const std::string& series, const std::string& model, const XAxis& x,
+                     JKind j) {
+  PlotLine l = series_line(series, model);
+  for (const ReportPoint* p : points_along(data, series, model, x)) {
     const MeanCI m = j_star(p->stats, j);
     if (m.n == 0 || !std::isfinite(x_value(*p, x))) continue;  // no run with J defined: nothing to draw
     l.x.push_back(x_value(*p, x));
@@ -145,13 +157,8 @@ std::vector<PlotBand> baseline_bands(const ReportData& data, JKind j) {
 // only picture of the points where no run emptied the board (no J_paper to draw).
 PlotLine discharge_line(const ReportData& data, const std::string& series, const std::string& model,
                         const XAxis& x) {
-  PlotLine l;
-  l.label = fmt::format("{} ({})", series, model_name(model));
-  l.model = model;
-  auto pts = points_of(data, series, model);
-  std::stable_sort(pts.begin(), pts.end(),
-                   [&](const ReportPoint* a, const ReportPoint* b) { return x_value(*a, x) < x_value(*b, x); });
-  for (const ReportPoint* p : pts) {
+  PlotLine l = series_line(series, model);
+  for (const ReportPoint* p : points_along(data, series, model, x)) {
     if (!std::isfinite(p->stats.mean_passed_fraction) || !std::isfinite(x_value(*p, x))) continue;
     l.x.push_back(x_value(*p, x));
     l.y.push_back(p->stats.mean_passed_fraction);
