@@ -518,6 +518,13 @@ TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
   EXPECT_EQ(sec.overlays.at("clogging.png").at(0).x.size(), 2u);
   EXPECT_NE(render_markdown(sec.tables.at(1)).find("| small | 2D | 0.6931"), std::string::npos)
       << render_markdown(sec.tables.at(1));
+  // The decomposition table: at (W/d)^2 = 2 each run has the first avalanche (7 spheres in
+  // 1 s) and ten of 3 in 0.5 s: tau = (1 + 10 x 0.5) / (6 + 10 x 2) s, <s> = (7 + 30) / 11.
+  const TextTable& decomposition = sec.tables.at(2);
+  ASSERT_EQ(decomposition.rows.size(), 4u);
+  EXPECT_EQ(decomposition.rows[1][5], fmt_num(37.0 / 11.0, 4));
+  EXPECT_EQ(decomposition.rows[1][6], fmt_num(6.0 / 26.0, 4));
+  EXPECT_EQ(decomposition.rows[1][12], fmt_num(26.0 / 6.0, 4)) << "1/tau";
   // No J_paper anywhere (every run clogged): the tables say n/a and the J* figure has no line.
   EXPECT_NE(render_text(point_tables(data, JKind::paper).at(0)).find("n/a"), std::string::npos);
 }
