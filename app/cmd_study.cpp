@@ -113,7 +113,7 @@ RunnerSummary run_confirm_stage(const StudyDef& study, Store& store, const Runne
 int cmd_study(const StudyCommands::Options& o) {
   StudyDef study = load_study(o.study_file);
   if (o.quick && !study.quick.present)  // silently running the full study would be no quick look
-    throw ScenarioError({o.study_file, 0, 0}, "quick", "--quick",
+    throw ScenarioError({o.study_file, 0, 0}, "", "",
                         "this study has no [quick] table, so no quick variant: run it without --quick, "
                         "or add [quick] with replicates / models / thin");
   if (o.quick) study = apply_quick(std::move(study));

@@ -41,7 +41,8 @@ AvalancheStatistics avalanche_statistics(const std::vector<RunRecord>& runs, con
   a.tail = geometric_tail_check(a.sizes, opt);
   // Threshold at the mean: ~e^-1 of a geometric sample lies above it, enough to test, and
   // far enough up to leave out the small-size deficit seen in long runs.
-  if (a.tail.mean >= 1) a.upper_tail = geometric_upper_tail_check(a.sizes, static_cast<int>(std::ceil(a.tail.mean)), opt);
+  // <s> is the censoring-aware mean of the table, the one the threshold is named after.
+  if (a.size.mean >= 1) a.upper_tail = geometric_upper_tail_check(a.sizes, static_cast<int>(std::ceil(a.size.mean)), opt);
   return a;
 }
 

@@ -163,7 +163,7 @@ def distance_claims(t, pts):
                 study, rr = retest
                 ok = significantly(rr, "significantly above")
                 evidence += (f"; re-test of D = {fmt(num(r, 'obstruction.distance_mm'))} mm (results/{study}, fresh seeds, "
-                             f"{int(num(rr, 'n_runs'))} runs each): J/J_0 = {ratio_text(rr)} ({rr['verdict']}): "
+                             f"{int(num(rr, 'n_runs'))} runs): J/J_0 = {ratio_text(rr)} ({rr['verdict']}): "
                              + ("reproduced" if ok else "not reproduced"))
                 if ok:
                     confirmed.append(r)

@@ -233,7 +233,7 @@ void avalanche_and_clog_columns(CsvRow& row, const PointStatistics& s) {
   row.count("aval_n_censored", a.size.n_censored);
   row.num("aval_tail_p", a.tail.tested ? a.tail.p_value : kNaN);
   row.text("aval_tail_law", a.tail.law);
-  row.count("aval_upper_tail_from", static_cast<std::size_t>(a.upper_tail.from));
+  row.num("aval_upper_tail_from", a.upper_tail.n > 0 ? a.upper_tail.from : kNaN);
   row.count("aval_upper_tail_n", a.upper_tail.n);
   row.num("aval_upper_tail_p", a.upper_tail.tested ? a.upper_tail.p_value : kNaN);
   row.count("clog_n", s.clogs.n);

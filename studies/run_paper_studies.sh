@@ -24,5 +24,4 @@ main() {
     build/app/gapflow report "$out" --study "$file" > /dev/null
   done
 }
-main "$@"
-exit
+main "$@"; exit $?  # one line: bash never reads past it

@@ -259,6 +259,8 @@ SeriesDef read_series(StrictTable t, const std::string& source, const std::files
 QuickDef read_quick(StrictTable t) {
   QuickDef q;
   q.present = true;
+  if (!t.get("replicates") && !t.get("models") && !t.get("thin"))
+    t.missing("replicates", "[quick] must set replicates, models or thin: an empty one is no cheaper study");
   if (auto r = t.integer("replicates", 1)) q.replicates = static_cast<int>(*r);
   if (t.get("models")) q.models = read_models(t);
   if (auto k = t.integer("thin", 1)) q.thin = static_cast<int>(*k);

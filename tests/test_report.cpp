@@ -281,8 +281,8 @@ TEST(ReportPlots, ScriptDrawsMissingValuesAndAsymmetricBars) {
 // studies/paper_claims.py: a significant peak is the best of several positions, so the
 // claim is held only if the re-test with fresh seeds (cylinder-peak-3d) finds it too.
 TEST(PaperClaims, APeakIsHeldOnlyIfItsReTestReproducesIt) {
-  const auto python = find_python_with_matplotlib();
-  if (!python) GTEST_SKIP() << "no python3";
+  const auto python = find_python_with_matplotlib();  // the claims need no matplotlib, but the same python3
+  if (!python) GTEST_SKIP() << "no python3 with matplotlib found";
   TempDir dir;
   const std::string header =
       "series,model,n_runs,J_paper_n,J_paper_mean,clog_n,obstruction.distance_mm,D_over_d,d_mm,ratio,ratio_lo,"
@@ -485,7 +485,8 @@ std::vector<StoredRun> clogging_runs(int gaps) {
       const int s = (1 << k) - 1;
       r.record.avalanches.push_back({7, 0.0, 1.0, true, false});  // the first: excluded
       for (int i = 0; i < 10; ++i) r.record.avalanches.push_back({s, 2.0 + i, 2.5 + i, false, false});
-      r.record.clogs.push_back({1.0, 30.0, true});
+      r.record.clogs.push_back({1.0, 2.0, false});  // one completed clog of 2 s
+      r.record.clogs.push_back({12.5, 30.0, true});
       runs.push_back(std::move(r));
     }
   return runs;
@@ -519,12 +520,21 @@ TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
   EXPECT_NE(render_markdown(sec.tables.at(1)).find("| small | 2D | 0.6931"), std::string::npos)
       << render_markdown(sec.tables.at(1));
   // The decomposition table: at (W/d)^2 = 2 each run has the first avalanche (7 spheres in
-  // 1 s) and ten of 3 in 0.5 s: tau = (1 + 10 x 0.5) / (6 + 10 x 2) s, <s> = (7 + 30) / 11.
+  // 1 s), ten of 3 in 0.5 s and one completed clog of 2 s: tau = (1 + 10 x 0.5) / (6 + 10 x 2) s,
+  // <s> = 37/11, T_flow = (6 + 11 tau)/11, T_clog = 2 - tau, so <s>/(T_flow + T_clog) =
+  // 37/28 and J_total = 37 / (6 + 11 tau + 2 - tau).
   const TextTable& decomposition = sec.tables.at(2);
   ASSERT_EQ(decomposition.rows.size(), 4u);
-  EXPECT_EQ(decomposition.rows[1][5], fmt_num(37.0 / 11.0, 4));
-  EXPECT_EQ(decomposition.rows[1][6], fmt_num(6.0 / 26.0, 4));
-  EXPECT_EQ(decomposition.rows[1][12], fmt_num(26.0 / 6.0, 4)) << "1/tau";
+  const std::vector<std::string>& row = decomposition.rows[1];
+  const double tau = 6.0 / 26.0;
+  EXPECT_EQ(row[4], "2") << "completed clogs, pooled over the two runs";
+  EXPECT_EQ(row[5], fmt_num(37.0 / 11.0, 4));
+  EXPECT_EQ(row[6], fmt_num(tau, 4));
+  EXPECT_EQ(row[7], fmt_num((6.0 + 11.0 * tau) / 11.0, 4));
+  EXPECT_EQ(row[8], fmt_num(2.0 - tau, 4));
+  EXPECT_EQ(row[9], fmt_num(37.0 / 28.0, 4));
+  EXPECT_EQ(row[10], fmt_num(37.0 / (8.0 + 10.0 * tau), 4));
+  EXPECT_EQ(row[12], fmt_num(1.0 / tau, 4)) << "1/tau";
   // No J_paper anywhere (every run clogged): the tables say n/a and the J* figure has no line.
   EXPECT_NE(render_text(point_tables(data, JKind::paper).at(0)).find("n/a"), std::string::npos);
 }

@@ -303,6 +303,14 @@ TEST(StudyLoader, RejectsUnknownKeyInSweepAndUnknownSection) {
   EXPECT_EQ(e.key(), "reprot");
 }
 
+TEST(StudyLoader, RejectsAnEmptyQuickTable) {
+  // [quick] with nothing in it would run the full study under --quick's name.
+  const ScenarioError e = study_error(study_text("", "[quick]\n"));
+  EXPECT_EQ(e.key(), "quick.replicates");
+  EXPECT_EQ(e.where().line, 7);
+  EXPECT_NE(std::string(e.what()).find("must set replicates, models or thin"), std::string::npos) << e.what();
+}
+
 TEST(StudyLoader, RejectsBadModelsEntry) {
   const ScenarioError e = study_error(study_text("models = [\"2d\", \"4d\"]", ""));
   EXPECT_EQ(e.key(), "study.models");
