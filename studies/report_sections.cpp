@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace gapflow {
 
@@ -256,6 +257,58 @@ std::vector<std::string> decomposition_row(const ClogSeries& cs, const ClogPoint
   return row;
 }
 
+// Points with fewer completed avalanches draw no size distribution (it would be noise).
+constexpr std::size_t kMinSizesForDistribution = 20;
+
+// ln P(S >= s) against (s - 1)(-ln q), q = 1 - 1/mean of the completed sizes: a geometric
+// law with that mean is the line y = -x exactly, whatever the mean, so every point shares
+// one figure and a deviation shows where it is (small sizes: left; tail: right).
+PlotLine size_distribution_line(const ClogSeries& cs, const ClogPoint& c) {
+  PlotLine l;
+  l.label = fmt::format("{} ({}) W/d {}", cs.series, model_name(cs.model), fmt_num(c.w_over_d, 3));
+  l.model = cs.model;
+  l.style = "markers";
+  std::vector<int> sizes = c.point->stats.avalanches.sizes;
+  if (sizes.size() < kMinSizesForDistribution) return l;
+  const double n = static_cast<double>(sizes.size());
+  const double mean = std::accumulate(sizes.begin(), sizes.end(), 0.0) / n;
+  if (!(mean > 1)) return l;
+  const double rate = -std::log1p(-1.0 / mean);  // -ln q
+  std::sort(sizes.begin(), sizes.end());
+  for (std::size_t i = 0; i < sizes.size(); ++i) {
+    if (i > 0 && sizes[i] == sizes[i - 1]) continue;  // one point per distinct size
+    l.x.push_back((sizes[i] - 1) * rate);
+    l.y.push_back(std::log((n - static_cast<double>(i)) / n));  // P(S >= s): the sizes from i on
+  }
+  return l;
+}
+
+PlotFigure size_distribution_figure(const CloggingAnalysis& a) {
+  PlotFigure f{"avalanche_sizes.png",
+               "Avalanche sizes against a geometric law (the line y = -x)",
+               "(s - 1) (-ln q),  q = 1 - 1/mean size",
+               "ln P(S >= s)",
+               {},
+               {},
+               false};
+  double x_max = 0;
+  for (const ClogSeries& cs : a.series)
+    for (const ClogPoint& c : cs.points) {
+      PlotLine l = size_distribution_line(cs, c);
+      if (l.x.empty()) continue;
+      x_max = std::max(x_max, l.x.back());
+      f.lines.push_back(std::move(l));
+    }
+  if (f.lines.empty()) return f;
+  PlotLine law;
+  law.label = "geometric law";
+  law.style = "curve_fixed";
+  law.x = {0.0, x_max};
+  law.y = {0.0, -x_max};
+  f.lines.push_back(std::move(law));
+  return f;
+}
+
 // A line through 2 points fits them exactly and has no interval: it is not drawn
 // (as the Beverloo fits without degrees of freedom are not).
 bool drawn(const LineFit& f) { return f.ok && f.n >= 3; }
@@ -348,6 +401,15 @@ ExperimentSection clogging_section(const ReportData& data, const ReportOptions&)
   s.tables.push_back(std::move(pts));
   s.tables.push_back(std::move(fits));
   s.tables.push_back(std::move(decomposition));
+  PlotFigure sizes = size_distribution_figure(a);
+  if (!sizes.lines.empty()) {
+    s.paragraphs.push_back(fmt::format(
+        "avalanche_sizes.png: the distribution of the completed avalanche sizes of every point with at "
+        "least {} of them, scaled so that a geometric law is the line y = -x; points above the line at the "
+        "left mean too few small avalanches, a bend at the right a tail unlike the law's.",
+        kMinSizesForDistribution));
+    s.figures.push_back(std::move(sizes));
+  }
   return s;
 }
 

@@ -539,6 +539,38 @@ TEST(ReportClogging, FitsLnMeanSizeAgainstGapSquared) {
   EXPECT_NE(render_text(point_tables(data, JKind::paper).at(0)).find("n/a"), std::string::npos);
 }
 
+// The size-distribution figure: twenty sizes, 1 x 10, 2 x 6, 3 x 4 (mean 1.7, q = 1 - 1/1.7)
+// give ln P(S >= s) = 0, ln(10/20), ln(4/20) at x = 0, -ln q, -2 ln q; a point whose
+// sizes are all 1 (no geometric fit) draws nothing.
+TEST(ReportClogging, SizeDistributionIsScaledSoThatTheGeometricLawIsMinusX) {
+  std::vector<StoredRun> runs = clogging_runs(2);
+  for (StoredRun& r : runs) {
+    if (r.id.point != 1) continue;
+    r.record.avalanches.resize(1);  // keep the first (excluded)
+    for (int i = 0; i < 10; ++i)
+      r.record.avalanches.push_back({i % 2 == 0 ? 1 : (i % 4 == 1 ? 2 : 3), 2.0 + i, 2.5 + i, false, false});
+  }
+  // Per run: i = 0..9 gives sizes 1,2,1,3,1,2,1,3,1,2 -> 5 ones, 3 twos, 2 threes; two runs.
+  StudyInfo info;
+  info.report.kinds = {ReportKind::clogging};
+  const ReportData data = collect_report_data(runs, info);
+  const ExperimentSection sec = clogging_section(data, info.report);
+  ASSERT_EQ(sec.figures.size(), 1u);
+  const PlotFigure& f = sec.figures[0];
+  EXPECT_EQ(f.file, "avalanche_sizes.png");
+  ASSERT_EQ(f.lines.size(), 2u) << "point 0 (all sizes 1) draws nothing; the law's line";
+  const PlotLine& l = f.lines[0];
+  const double mean = (10 * 1 + 6 * 2 + 4 * 3) / 20.0, rate = -std::log(1.0 - 1.0 / mean);
+  ASSERT_EQ(l.x.size(), 3u);
+  EXPECT_NEAR(l.x[1], rate, 1e-12);
+  EXPECT_NEAR(l.x[2], 2 * rate, 1e-12);
+  EXPECT_NEAR(l.y[0], 0.0, 1e-12);
+  EXPECT_NEAR(l.y[1], std::log(10.0 / 20.0), 1e-12);
+  EXPECT_NEAR(l.y[2], std::log(4.0 / 20.0), 1e-12);
+  EXPECT_EQ(f.lines[1].label, "geometric law");
+  EXPECT_NEAR(f.lines[1].y.back(), -f.lines[1].x.back(), 1e-12);
+}
+
 // The screen -> confirm section holds the 2D/3D comparison: asking for both gives it once.
 TEST(ReportModels, ScreenConfirmAndModelsGiveOneComparison) {
   StudyInfo info;
