@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace gapflow {
 
@@ -81,7 +82,26 @@ void GapMonitor::end_step(double t) {
   max_conservation_error_ = std::max(max_conservation_error_, error);
   inside_this_step_ = 0;
   t_prev_ = t;
+  locate_clog(t);
 }
+
+double GapMonitor::nearest_to_gap_m() const {
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const State& s : state_)
+    if (!s.passed && !s.escaped) nearest = std::min(nearest, std::hypot(s.last.x, s.last.y));
+  return nearest;
+}
+
+// Once per quiet period, at the step that makes it a clog: the positions are this
+// step's, before a protocol moves anything (the driver calls end_step first).
+void GapMonitor::locate_clog(double t) {
+  if (t - last_crossing_t_ < sc_.def.run.clog_timeout_s) return;
+  if (!clog_fronts_.empty() && clog_fronts_.back().t_start == last_crossing_t_) return;
+  if (inside_ == 0) return;  // nothing left on the board: the discharge ended, not a clog
+  clog_fronts_.push_back({last_crossing_t_, nearest_to_gap_m()});
+}
+
+bool clog_at_gap(double front_m, double gap_m, double diameter_m) { return front_m <= gap_m / 2 + diameter_m; }
 
 void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s, double t_end,
                   std::vector<Avalanche>& avalanches, std::vector<Clog>& clogs) {
@@ -92,7 +112,7 @@ void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s,
   for (const Crossing& c : crossings) {
     const double wait = c.t - previous;
     if (wait >= clog_timeout_s) {
-      clogs.push_back({previous, wait, false});
+      clogs.push_back({previous, wait, false, std::nullopt});
       open = false;  // the current avalanche (if any) ended in this clog
     }
     if (!open) {
@@ -106,7 +126,7 @@ void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s,
   }
   const double tail = t_end - previous;
   if (tail >= clog_timeout_s) {
-    clogs.push_back({previous, tail, true});  // the run ended before this clog broke
+    clogs.push_back({previous, tail, true, std::nullopt});  // the run ended before this clog broke
   } else if (open) {
     avalanches.back().censored = true;  // the run ended while flowing (or nothing was left)
   }
@@ -142,6 +162,10 @@ void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
     r.clogs.pop_back();
     if (!r.avalanches.empty()) r.avalanches.back().censored = true;
   }
+  // Where each clog formed: matched by its start (both are the same crossing time).
+  for (Clog& c : r.clogs)
+    for (const ClogFront& f : clog_fronts_)
+      if (f.t_start == c.t_start) c.front_m = f.front_m;
   // Rate while flowing: the crossing intervals inside avalanches only. A clog's
   // duration runs from crossing to crossing, so it must not also remove an interval.
   int intervals = 0;

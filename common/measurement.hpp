@@ -44,10 +44,18 @@ class GapMonitor {
   double last_crossing_time() const { return last_crossing_t_; }
   const std::vector<Crossing>& crossings() const { return crossings_; }
 
-  // Fill the measurement part of a record (counts, crossings, avalanches, clogs, J, regime).
+  // Fill the measurement part of a record (counts, crossings, avalanches, clogs
+  // with where each one formed, J, regime).
   void finish(double t_end, EndReason reason, RunRecord& record) const;
 
  private:
+  struct ClogFront {
+    double t_start = 0;  // s, the last crossing before the clog (as Clog::t_start)
+    double front_m = 0;  // m, nearest particle on the board to the gap centre at detection
+  };
+  void locate_clog(double t);
+  double nearest_to_gap_m() const;
+
   struct State {
     bool seen = false;
     bool passed = false;
@@ -68,7 +76,14 @@ class GapMonitor {
   double last_crossing_t_ = 0;
   double retire_depth_ = 0;    // m below the gap line where passed particles are removed
   double gap_tolerance_ = 0;   // m, how far outside |x| = W/2 a crossing may lie (shaking moves the tips)
+  std::vector<ClogFront> clog_fronts_;  // one per quiet period of at least clog_timeout_s
 };
+
+// The classification of a clog's front (Clog::front_m): at the gap if a particle
+// on the board is within W/2 + d of the gap centre (every arch across the gap
+// has its feet there), upstream otherwise (the mouth ran empty: the flow stopped
+// further up, e.g. between an obstruction and the walls).
+bool clog_at_gap(double front_m, double gap_m, double diameter_m);
 
 // Stop rule shared by both models.
 struct StopDecision {

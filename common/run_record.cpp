@@ -65,8 +65,11 @@ toml::array avalanches_array(const std::vector<Avalanche>& as) {
 
 toml::array clogs_array(const std::vector<Clog>& cs) {
   toml::array out;
-  for (const Clog& c : cs)
-    out.push_back(toml::table{{"t_start_s", c.t_start}, {"duration_s", c.duration}, {"censored", c.censored}});
+  for (const Clog& c : cs) {
+    toml::table t{{"t_start_s", c.t_start}, {"duration_s", c.duration}, {"censored", c.censored}};
+    if (c.front_m) t.insert("front_m", *c.front_m);
+    out.push_back(std::move(t));
+  }
   return out;
 }
 

@@ -30,6 +30,12 @@ struct Clog {
   double t_start = 0;     // s, last crossing before the clog (or release)
   double duration = 0;    // s, until the next crossing (or run end)
   bool censored = false;  // the run ended before the clog broke
+  // m, where the flow stopped: the distance from the gap centre to the nearest
+  // particle on the board when the clog was detected (clog_timeout_s after it
+  // began, before any protocol acts). An arch at the gap keeps a particle within
+  // W/2 + d (clog_at_gap); a clog upstream (e.g. between obstruction and walls)
+  // leaves the gap's mouth empty. Empty for records made before it was measured.
+  std::optional<double> front_m;
 };
 
 enum class Regime { continuous, intermittent, clogged };

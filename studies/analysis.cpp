@@ -1,5 +1,6 @@
 #include "studies/analysis.hpp"
 
+#include "common/measurement.hpp"
 #include "common/random.hpp"
 
 #include <algorithm>
@@ -48,10 +49,14 @@ AvalancheStatistics avalanche_statistics(const std::vector<RunRecord>& runs, con
 
 ClogStatistics clog_statistics(const std::vector<RunRecord>& runs, double hill_top_fraction) {
   ClogStatistics c;
-  std::vector<double> all, completed;
+  std::vector<double> all, completed, fronts_d;
   for (const RunRecord& r : runs)
     for (const Clog& cl : r.clogs) {
       all.push_back(cl.duration);
+      if (cl.front_m) {
+        fronts_d.push_back(*cl.front_m / r.diameter_m);
+        c.n_at_gap += clog_at_gap(*cl.front_m, r.gap_m, r.diameter_m) ? 1 : 0;
+      }
       if (cl.censored) {
         ++c.n_censored;
       } else {
@@ -60,6 +65,8 @@ ClogStatistics clog_statistics(const std::vector<RunRecord>& runs, double hill_t
     }
   c.n = all.size();
   if (c.n == 0) return c;
+  c.n_located = fronts_d.size();
+  if (!fronts_d.empty()) c.median_front_d = median(fronts_d);
   c.fraction_censored = static_cast<double>(c.n_censored) / static_cast<double>(c.n);
   c.mean_all_s = mean_or_nan(all);
   c.max_s = *std::max_element(all.begin(), all.end());

@@ -44,6 +44,11 @@ struct ClogStatistics {
   // fixed number that would distort the tail.
   HillEstimate tail;
   bool heavy_tail = false;          // tail.alpha < 2: infinite variance, J's mean over runs converges slowly
+  // Where the clogs formed (Clog::front_m; clog_at_gap in common/measurement.hpp),
+  // over the clogs whose front was measured (records stored before have none).
+  std::size_t n_located = 0;
+  std::size_t n_at_gap = 0;         // the rest formed upstream: the gap's mouth had run empty
+  double median_front_d = kNaN;     // median distance of the front from the gap centre, in nominal d
 };
 
 // J = <s> / (<T_flow> + <T_clog>).

@@ -152,6 +152,8 @@ std::string fmt_ci(double lo, double hi, int digits = 4);  // "[lo, hi]" or "n/a
 std::string fmt_interval(const Interval& i, int digits = 4);
 std::string fmt_mean_ci(const MeanCI& m,
                         int digits = 4);  // "mean [lo, hi]", "mean (1 run)" or "n/a"
+// "n", or "n: g at gap, u upstream" where the clogs' fronts were measured.
+std::string fmt_clogs(const ClogStatistics& c);
 
 // Per series and model: the points with the main statistics.
 std::vector<TextTable> point_tables(const ReportData& data, JKind j);

@@ -97,7 +97,11 @@ std::string render_report_markdown(const MarkdownInput& in) {
       "also need Welch's test), median, and the paper's rule (mean after dropping runs "
       "beyond 2 sigma; how many were dropped). Other means with Student-t 95 % "
       "intervals; J* = J sqrt(d/g), g = 9.81 m/s^2; <s>: mean avalanche size "
-      "(censoring-aware); n/a: undefined (e.g. J_paper when no run emptied the "
+      "(censoring-aware); clogs: how many (no crossing for run.clog_timeout_s), and "
+      "where they formed when that was measured: at the gap (a particle within W/2 + d "
+      "of the gap centre when the clog was detected) or upstream (the gap's mouth had "
+      "run empty: the flow stopped further up, e.g. between obstruction and walls); "
+      "n/a: undefined (e.g. J_paper when no run emptied the "
       "board). Every statistic (decomposition included) is in points.csv.\n\n";
   for (const TextTable& t : in.tables) out += render_markdown(t) + "\n";
   const std::string links = figure_links(in.figures, in.pngs);

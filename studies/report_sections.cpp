@@ -234,7 +234,7 @@ std::vector<std::string> clog_point_row(const ClogSeries& cs, const ClogPoint& c
           fmt_num(c.ln_s1, 3) + " " + fmt_ci(c.ln_lo, c.ln_hi, 3),
           tail.tested ? fmt::format("p = {}", fmt_num(tail.p_value, 2)) : "n/a",
           upper_tail_text(st.avalanches.upper_tail),
-          fmt::format("{}", cl.n),
+          fmt_clogs(cl),
           fmt_num(cl.mean_uncensored_s, 3),
           fmt_num(cl.median_uncensored_s, 3),
           fmt_num(cl.fraction_censored, 2),

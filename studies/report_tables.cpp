@@ -23,6 +23,13 @@ std::string fmt_ci(double lo, double hi, int digits) {
 
 std::string fmt_interval(const Interval& i, int digits) { return fmt_ci(i.lo, i.hi, digits); }
 
+std::string fmt_clogs(const ClogStatistics& c) {
+  if (c.n_located == 0) return fmt::format("{}", c.n);
+  std::string out = fmt::format("{}: {} at gap, {} upstream", c.n, c.n_at_gap, c.n_located - c.n_at_gap);
+  if (c.n_located < c.n) out += fmt::format(", {} not located", c.n - c.n_located);
+  return out;
+}
+
 namespace {
 
 std::vector<std::size_t> column_widths(const TextTable& t) {
@@ -125,7 +132,7 @@ std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_base
   row.insert(row.end(), {
                             fmt_mean_ci(j_star(s, j)),
                             av.n_uncensored > 0 ? fmt_num(av.mean, 3) + " " + fmt_interval(av.ci95, 3) : "n/a",
-                            fmt::format("{}", s.clogs.n),
+                            fmt_clogs(s.clogs),
                             s.regime.label,
                         });
   if (with_baseline) {
@@ -241,6 +248,9 @@ void avalanche_and_clog_columns(CsvRow& row, const PointStatistics& s) {
   row.num("clog_median_s", s.clogs.median_uncensored_s);
   row.num("clog_censored_fraction", s.clogs.fraction_censored);
   row.num("clog_hill_alpha", s.clogs.tail.valid() ? s.clogs.tail.alpha : kNaN);
+  row.count("clog_located_n", s.clogs.n_located);
+  row.count("clog_at_gap_n", s.clogs.n_at_gap);
+  row.num("clog_median_front_d", s.clogs.median_front_d);
 }
 
 void regime_and_decomposition_columns(CsvRow& row, const PointStatistics& s) {

@@ -48,10 +48,14 @@ CREATE TABLE IF NOT EXISTS avalanches (
 );
 CREATE TABLE IF NOT EXISTS clogs (
   job_key TEXT NOT NULL REFERENCES runs(job_key), idx INTEGER NOT NULL, t_start_s REAL NOT NULL,
-  duration_s REAL NOT NULL, censored INTEGER NOT NULL,
+  duration_s REAL NOT NULL, censored INTEGER NOT NULL, front_m REAL,
   PRIMARY KEY (job_key, idx)
 );
 )sql";
+
+// Added to schema version 1 later (Clog::front_m): a store written before it gets
+// the column when it is next written to; its older clogs read back without a front.
+constexpr const char* kClogFrontColumn = "ALTER TABLE clogs ADD COLUMN front_m REAL";
 
 // Added to schema version 1 later: created when first written, so older stores stay readable.
 constexpr const char* kStudyFilesSchema = R"sql(
@@ -148,6 +152,12 @@ bool has_table(sqlite3* db, const std::string& name) {
   return s.step();
 }
 
+bool has_column(sqlite3* db, const std::string& table, const std::string& column) {
+  Statement s(db, "SELECT 1 FROM pragma_table_info(?) WHERE name = ?");
+  s.bind_all(table, column);
+  return s.step();
+}
+
 std::string hex(std::uint64_t v) { return fmt::format("{:016x}", v); }
 std::uint64_t from_hex(const std::string& s) { return std::stoull(s, nullptr, 16); }
 
@@ -184,23 +194,25 @@ void insert_children(sqlite3* db, const std::string& key, const RunRecord& r) {
     const Avalanche& v = r.avalanches[i];
     a.bind_all(key, static_cast<int>(i), v.size, v.t_start, v.t_end, v.first, v.censored).run();
   }
-  Statement k(db, "INSERT INTO clogs (job_key, idx, t_start_s, duration_s, censored) VALUES (?, ?, ?, ?, ?)");
+  if (!has_column(db, "clogs", "front_m")) exec(db, kClogFrontColumn);
+  Statement k(db, "INSERT INTO clogs (job_key, idx, t_start_s, duration_s, censored, front_m) VALUES (?, ?, ?, ?, ?, ?)");
   for (std::size_t i = 0; i < r.clogs.size(); ++i) {
     const Clog& v = r.clogs[i];
-    k.bind_all(key, static_cast<int>(i), v.t_start, v.duration, v.censored).run();
+    k.bind_all(key, static_cast<int>(i), v.t_start, v.duration, v.censored, v.front_m).run();
   }
 }
 
-void load_children(sqlite3* db, const std::string& key, RunRecord& r) {
+void load_children(sqlite3* db, const std::string& key, bool with_clog_fronts, RunRecord& r) {
   Statement c(db, "SELECT id, t_s, x_m FROM crossings WHERE job_key = ? ORDER BY rowid");
   c.bind(1, key);
   while (c.step()) r.crossings.push_back({c.integer(0), c.real(1), c.real(2)});
   Statement a(db, "SELECT size, t_start_s, t_end_s, \"first\", censored FROM avalanches WHERE job_key = ? ORDER BY idx");
   a.bind(1, key);
   while (a.step()) r.avalanches.push_back({a.integer(0), a.real(1), a.real(2), a.integer(3) != 0, a.integer(4) != 0});
-  Statement k(db, "SELECT t_start_s, duration_s, censored FROM clogs WHERE job_key = ? ORDER BY idx");
+  Statement k(db, with_clog_fronts ? "SELECT t_start_s, duration_s, censored, front_m FROM clogs WHERE job_key = ? ORDER BY idx"
+                                   : "SELECT t_start_s, duration_s, censored, NULL FROM clogs WHERE job_key = ? ORDER BY idx");
   k.bind(1, key);
-  while (k.step()) r.clogs.push_back({k.real(0), k.real(1), k.integer(2) != 0});
+  while (k.step()) r.clogs.push_back({k.real(0), k.real(1), k.integer(2) != 0, k.optional_real(3)});
 }
 
 // One CSV field (RFC 4180 quoting).
@@ -336,7 +348,8 @@ std::vector<StoredRun> Store::load(const std::optional<std::string>& study) cons
     r.incline_rad = s.real(c++), r.time_step_s = s.real(c++), run.finished_at = s.text(c++);
     out.push_back(std::move(run));
   }
-  for (StoredRun& run : out) load_children(db_, run.id.key, run.record);
+  const bool with_clog_fronts = has_column(db_, "clogs", "front_m");
+  for (StoredRun& run : out) load_children(db_, run.id.key, with_clog_fronts, run.record);
   return out;
 }
 

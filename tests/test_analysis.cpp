@@ -122,8 +122,8 @@ TEST(Clogs, MeanMedianCensoringAndTail) {
   std::vector<RunRecord> runs(2);
   RandomStream rs(43);
   // Pareto durations (x_m = 1 s, alpha = 1.2) plus one censored permanent clog of 30 s.
-  for (int i = 0; i < 500; ++i) runs[i % 2].clogs.push_back({0, std::pow(1.0 - rs.uniform(), -1 / 1.2), false});
-  runs[1].clogs.push_back({0, 30.0, true});
+  for (int i = 0; i < 500; ++i) runs[i % 2].clogs.push_back({0, std::pow(1.0 - rs.uniform(), -1 / 1.2), false, std::nullopt});
+  runs[1].clogs.push_back({0, 30.0, true, std::nullopt});
   const ClogStatistics c = clog_statistics(runs);
   EXPECT_EQ(c.n, 501u);
   EXPECT_EQ(c.n_censored, 1u);

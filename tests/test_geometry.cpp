@@ -81,7 +81,9 @@ TEST(Geometry, PackingHasNoOverlapsAndStaysInsideTheWalls) {
     EXPECT_GE(length(p.position - c.obstruction.circle.centre), c.obstruction.circle.radius + r);
     for (size_t j = i + 1; j < c.particles.size(); ++j) {
       const double dist = length(p.position - c.particles[j].position);
-      if (dist < 0.05) ASSERT_GE(dist, r + c.particles[j].diameter / 2) << i << " overlaps " << j;
+      if (dist < 0.05) {
+        ASSERT_GE(dist, r + c.particles[j].diameter / 2) << i << " overlaps " << j;
+      }
     }
   }
 }

@@ -95,6 +95,41 @@ TEST(GapMonitor, CountsACrossingOnceWithInterpolatedTimeAndFlagsCrossingsBesideT
   EXPECT_EQ(r.max_conservation_error, 0);
 }
 
+// Where a clog formed: at the step that makes a quiet period a clog, the distance
+// from the gap centre to the nearest particle on the board. First an arch at the
+// gap (a particle 0.6 d above the gap centre), then, after a crossing, a quiet
+// period with the mouth empty (nearest particle 10 d up).
+TEST(GapMonitor, LocatesEachClogByTheNearestParticleToTheGap) {
+  const CompiledScenario sc = gapflow::testing::compile_file(
+      "scenarios/paper/no_obstruction_medium.toml", {"particles.count=3", "run.clog_timeout_s=1"});
+  const double d = sc.nominal_diameter;
+  GapMonitor m(sc);
+  double t = 0;
+  auto hold = [&](Vec2 p0, Vec2 p1, Vec2 p2, double until) {
+    for (; t < until - 1e-9;) {
+      t += 0.1;
+      m.observe(0, p0, t);
+      m.observe(1, p1, t);
+      m.observe(2, p2, t);
+      m.end_step(t);
+    }
+  };
+  hold({0.0, 0.6 * d}, {0.0, 3 * d}, {0.0, 12 * d}, 1.5);      // clog from release, arch at the gap
+  hold({0.0, -0.5 * d}, {0.0, 10 * d}, {0.0, 12 * d}, 1.6);    // particle 0 crosses at ~1.55 s
+  hold({0.0, -0.5 * d}, {6 * d, 8 * d}, {0.0, 12 * d}, 3.0);   // quiet again, mouth empty (10 d)
+  hold({0.0, -0.5 * d}, {0.0, 4 * d}, {0.0, 12 * d}, 4.0);     // later, still quiet: not the front
+  hold({0.0, -0.5 * d}, {0.0, -0.5 * d}, {0.0, 12 * d}, 4.1);  // particle 1 crosses: clog broken
+  RunRecord r;
+  m.finish(t, EndReason::time_limit, r);
+  ASSERT_EQ(r.clogs.size(), 2u);
+  ASSERT_TRUE(r.clogs[0].front_m);
+  EXPECT_NEAR(*r.clogs[0].front_m, 0.6 * d, 1e-12) << "positions at detection (t = 1.0 s)";
+  EXPECT_TRUE(clog_at_gap(*r.clogs[0].front_m, sc.gap, d));
+  ASSERT_TRUE(r.clogs[1].front_m);
+  EXPECT_NEAR(*r.clogs[1].front_m, 10 * d, 1e-12) << "detected 1 s after the crossing (2.55 s), before particle 1 moved on";
+  EXPECT_FALSE(clog_at_gap(*r.clogs[1].front_m, sc.gap, d));
+}
+
 TEST(GapMonitor, AParticleThatVanishesBreaksConservation) {
   const CompiledScenario sc = gapflow::testing::compile_file(
       "scenarios/paper/no_obstruction_medium.toml", {"particles.count=2"});

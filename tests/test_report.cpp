@@ -485,8 +485,8 @@ std::vector<StoredRun> clogging_runs(int gaps) {
       const int s = (1 << k) - 1;
       r.record.avalanches.push_back({7, 0.0, 1.0, true, false});  // the first: excluded
       for (int i = 0; i < 10; ++i) r.record.avalanches.push_back({s, 2.0 + i, 2.5 + i, false, false});
-      r.record.clogs.push_back({1.0, 2.0, false});  // one completed clog of 2 s
-      r.record.clogs.push_back({12.5, 30.0, true});
+      r.record.clogs.push_back({1.0, 2.0, false, std::nullopt});  // one completed clog of 2 s
+      r.record.clogs.push_back({12.5, 30.0, true, std::nullopt});
       runs.push_back(std::move(r));
     }
   return runs;

@@ -198,6 +198,32 @@ TEST(Sim2DRun, NarrowGapWithoutShakingClogsPermanently) {
   ASSERT_FALSE(r.clogs.empty());
   EXPECT_TRUE(r.clogs.back().censored);
   EXPECT_GE(r.clogs.back().duration, 5.0);
+  // Without an obstruction the flow can only stop at the gap: every clog is located there.
+  for (const Clog& c : r.clogs) {
+    ASSERT_TRUE(c.front_m);
+    EXPECT_TRUE(clog_at_gap(*c.front_m, sc.gap, sc.nominal_diameter)) << *c.front_m / sc.nominal_diameter << " d";
+  }
+}
+
+// The cylinder at 70 mm leaves passages of ~1.2 d between itself and the bottleneck
+// walls (W/d = 4.3 at the gap): the flow stops in those passages, the gap's mouth
+// runs empty, and the clog is located upstream, within the cylinder's height.
+TEST(Sim2DRun, AClogBetweenACloseCylinderAndTheWallsIsLocatedUpstream) {
+  const CompiledScenario sc =
+      compile_file("scenarios/paper/cylinder.toml",
+                   {"obstruction.distance_mm=70", "particles.count=300", "shaking.walls.enabled=false",
+                    "shaking.obstruction.enabled=false", "run.stop_after_no_flow_s=3", "run.time_limit_s=20"});
+  Session2D s(sc);
+  const RunRecord r = run_simulation(sc, s);
+  EXPECT_EQ(r.regime, Regime::clogged);
+  ASSERT_FALSE(r.clogs.empty());
+  const double radius = sc.def.obstruction.diameter_mm * 1e-3 / 2, centre = sc.def.obstruction.distance_mm * 1e-3;
+  for (const Clog& c : r.clogs) {
+    ASSERT_TRUE(c.front_m);
+    EXPECT_FALSE(clog_at_gap(*c.front_m, sc.gap, sc.nominal_diameter)) << *c.front_m / sc.nominal_diameter << " d";
+    EXPECT_GT(*c.front_m, centre - radius);
+    EXPECT_LT(*c.front_m, centre + radius);
+  }
 }
 
 TEST(Sim2DRun, SameSeedGivesIdenticalCrossingTimes) {
