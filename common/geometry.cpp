@@ -203,17 +203,6 @@ double particle_size_factor(const ParticlesDef& p, const RunDef& run, int index)
   return 1.0;
 }
 
-double obstruction_distance(const ObstructionGeometry& g, Vec2 p) {
-  switch (g.shape) {
-    case ObstructionShape::none:
-      return 1e300;
-    case ObstructionShape::cylinder:
-      return length(p - g.circle.centre) - g.circle.radius;
-    default:
-      return signed_distance_to_convex(g.polygon.vertices, p);
-  }
-}
-
 // Particles sit on a triangular lattice above the barrier, spaced for the
 // largest possible diameter plus lattice_gap, and jittered inside the free
 // space so that no two overlap. Particle i's size and jitter come from its own
@@ -253,6 +242,33 @@ void pack_particles(CompiledScenario& c) {
 }
 
 }  // namespace
+
+double obstruction_distance(const ObstructionGeometry& g, Vec2 p) {
+  switch (g.shape) {
+    case ObstructionShape::none:
+      return 1e300;
+    case ObstructionShape::cylinder:
+      return length(p - g.circle.centre) - g.circle.radius;
+    default:
+      return signed_distance_to_convex(g.polygon.vertices, p);
+  }
+}
+
+bool obstruction_blocks_segment(const ObstructionGeometry& g, Vec2 a, Vec2 b) {
+  switch (g.shape) {
+    case ObstructionShape::none:
+      return false;
+    case ObstructionShape::cylinder:
+      return distance_to_segment(g.circle.centre, a, b) < g.circle.radius;
+    default: {
+      const std::vector<Vec2>& v = g.polygon.vertices;
+      if (inside_convex(v, a) || inside_convex(v, b)) return true;
+      for (size_t i = 0; i < v.size(); ++i)
+        if (segments_intersect(a, b, v[i], v[(i + 1) % v.size()])) return true;
+      return false;
+    }
+  }
+}
 
 double clearance_to_bottleneck_walls(const CompiledScenario& c, Vec2 p) {
   const Vec2 right_top{c.channel_width / 2, c.funnel_height};

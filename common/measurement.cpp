@@ -1,5 +1,7 @@
 #include "common/measurement.hpp"
 
+#include "common/clog_front.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -92,16 +94,36 @@ double GapMonitor::nearest_to_gap_m() const {
   return nearest;
 }
 
+bool GapMonitor::front_on_obstruction() const {
+  if (sc_.obstruction.shape == ObstructionShape::none) return false;
+  auto disc_of = [&](size_t id) {
+    return BoardDisc{static_cast<int>(id), state_[id].last, sc_.particles[id].diameter / 2};
+  };
+  std::vector<BoardDisc> board;
+  for (size_t i = 0; i < state_.size(); ++i)
+    if (!state_[i].passed && !state_[i].escaped) board.push_back(disc_of(i));
+  const double tolerance = obstruction_contact_tolerance(sc_);
+  for (int id : visible_from_gap(sc_, board))
+    if (touches_obstruction(sc_.obstruction, disc_of(static_cast<size_t>(id)), tolerance)) return true;
+  return false;
+}
+
 // Once per quiet period, at the step that makes it a clog: the positions are this
 // step's, before a protocol moves anything (the driver calls end_step first).
 void GapMonitor::locate_clog(double t) {
   if (t - last_crossing_t_ < sc_.def.run.clog_timeout_s) return;
   if (!clog_fronts_.empty() && clog_fronts_.back().t_start == last_crossing_t_) return;
   if (inside_ == 0) return;  // nothing left on the board: the discharge ended, not a clog
-  clog_fronts_.push_back({last_crossing_t_, nearest_to_gap_m()});
+  clog_fronts_.push_back({last_crossing_t_, nearest_to_gap_m(), front_on_obstruction()});
 }
 
 bool clog_at_gap(double front_m, double gap_m, double diameter_m) { return front_m <= gap_m / 2 + diameter_m; }
+
+std::optional<ClogSite> clog_site(const Clog& c, double gap_m, double diameter_m) {
+  if (!c.front_m) return std::nullopt;
+  if (c.on_obstruction.value_or(false)) return ClogSite::obstruction;
+  return clog_at_gap(*c.front_m, gap_m, diameter_m) ? ClogSite::gap : ClogSite::upstream;
+}
 
 void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s, double t_end,
                   std::vector<Avalanche>& avalanches, std::vector<Clog>& clogs) {
@@ -112,7 +134,7 @@ void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s,
   for (const Crossing& c : crossings) {
     const double wait = c.t - previous;
     if (wait >= clog_timeout_s) {
-      clogs.push_back({previous, wait, false, std::nullopt});
+      clogs.push_back({previous, wait, false});
       open = false;  // the current avalanche (if any) ended in this clog
     }
     if (!open) {
@@ -126,7 +148,7 @@ void segment_flow(const std::vector<Crossing>& crossings, double clog_timeout_s,
   }
   const double tail = t_end - previous;
   if (tail >= clog_timeout_s) {
-    clogs.push_back({previous, tail, true, std::nullopt});  // the run ended before this clog broke
+    clogs.push_back({previous, tail, true});  // the run ended before this clog broke
   } else if (open) {
     avalanches.back().censored = true;  // the run ended while flowing (or nothing was left)
   }
@@ -165,7 +187,10 @@ void GapMonitor::finish(double t_end, EndReason reason, RunRecord& r) const {
   // Where each clog formed: matched by its start (both are the same crossing time).
   for (Clog& c : r.clogs)
     for (const ClogFront& f : clog_fronts_)
-      if (f.t_start == c.t_start) c.front_m = f.front_m;
+      if (f.t_start == c.t_start) {
+        c.front_m = f.front_m;
+        c.on_obstruction = f.on_obstruction;
+      }
   // Rate while flowing: the crossing intervals inside avalanches only. A clog's
   // duration runs from crossing to crossing, so it must not also remove an interval.
   int intervals = 0;

@@ -1,5 +1,6 @@
 #include "common/protocols.hpp"
 
+#include "common/clog_front.hpp"
 #include "common/vec2_math.hpp"
 
 #include <algorithm>
@@ -61,22 +62,11 @@ std::vector<Vec2> ClogProtocol::sites_on_top(const std::vector<ActiveParticle>& 
 }
 
 std::vector<int> ClogProtocol::gap_blockers(const std::vector<ActiveParticle>& board) const {
-  const Vec2 centre{0, 0};
   const double reach = sc_.gap / 2 + sc_.def.protocol.perturb_radius_d * sc_.nominal_diameter;
-  std::vector<ActiveParticle> near;
+  std::vector<BoardDisc> near;
   for (const ActiveParticle& p : board)
-    if (length(p.position - centre) <= reach) near.push_back(p);
-  std::vector<int> blockers;
-  for (const ActiveParticle& p : near) {
-    bool seen = true;  // no other particle's disc cuts the segment from p to the gap centre
-    for (const ActiveParticle& q : near)
-      if (q.id != p.id && distance_to_segment(q.position, p.position, centre) < radius_of(sc_, q.id)) {
-        seen = false;
-        break;
-      }
-    if (seen) blockers.push_back(p.id);
-  }
-  return blockers;
+    if (length(p.position) <= reach) near.push_back({p.id, p.position, radius_of(sc_, p.id)});
+  return visible_from(sc_.obstruction, near, Vec2{0, 0});
 }
 
 void ClogProtocol::move(EngineSession& session, GapMonitor& monitor, const std::vector<int>& ids,

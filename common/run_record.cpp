@@ -68,6 +68,7 @@ toml::array clogs_array(const std::vector<Clog>& cs) {
   for (const Clog& c : cs) {
     toml::table t{{"t_start_s", c.t_start}, {"duration_s", c.duration}, {"censored", c.censored}};
     if (c.front_m) t.insert("front_m", *c.front_m);
+    if (c.on_obstruction) t.insert("on_obstruction", *c.on_obstruction);
     out.push_back(std::move(t));
   }
   return out;

@@ -35,8 +35,15 @@ struct Clog {
   // began, before any protocol acts). An arch at the gap keeps a particle within
   // W/2 + d (clog_at_gap); a clog upstream (e.g. between obstruction and walls)
   // leaves the gap's mouth empty. Empty for records made before it was measured.
-  std::optional<double> front_m;
+  std::optional<double> front_m = std::nullopt;
+  // Whether the arch leans on the obstruction: a particle of the front (a free line of
+  // sight to the gap centre, common/clog_front.hpp) touches it at detection. False
+  // without an obstruction; empty for records made before it was measured.
+  std::optional<bool> on_obstruction = std::nullopt;
 };
+
+// Where a clog formed (clog_site in common/measurement.hpp).
+enum class ClogSite { gap, obstruction, upstream };
 
 enum class Regime { continuous, intermittent, clogged };
 enum class EndReason { all_passed, n_passed, time_limit, permanent_clog };

@@ -53,9 +53,13 @@ ClogStatistics clog_statistics(const std::vector<RunRecord>& runs, double hill_t
   for (const RunRecord& r : runs)
     for (const Clog& cl : r.clogs) {
       all.push_back(cl.duration);
-      if (cl.front_m) {
+      if (const auto site = clog_site(cl, r.gap_m, r.diameter_m)) {
         fronts_d.push_back(*cl.front_m / r.diameter_m);
-        c.n_at_gap += clog_at_gap(*cl.front_m, r.gap_m, r.diameter_m) ? 1 : 0;
+        switch (*site) {
+          case ClogSite::gap: ++c.n_at_gap; break;
+          case ClogSite::obstruction: ++c.n_on_obstruction; break;
+          case ClogSite::upstream: ++c.n_upstream; break;
+        }
       }
       if (cl.censored) {
         ++c.n_censored;

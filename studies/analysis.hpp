@@ -44,11 +44,13 @@ struct ClogStatistics {
   // fixed number that would distort the tail.
   HillEstimate tail;
   bool heavy_tail = false;          // tail.alpha < 2: infinite variance, J's mean over runs converges slowly
-  // Where the clogs formed (Clog::front_m; clog_at_gap in common/measurement.hpp),
-  // over the clogs whose front was measured (records stored before have none).
+  // Where the clogs formed (clog_site in common/measurement.hpp), over the clogs whose
+  // front was measured (records stored before have none): n_located = the three sites.
   std::size_t n_located = 0;
-  std::size_t n_at_gap = 0;         // the rest formed upstream: the gap's mouth had run empty
-  double median_front_d = kNaN;     // median distance of the front from the gap centre, in nominal d
+  std::size_t n_at_gap = 0;          // an arch across the gap: mouth occupied, obstruction not touched
+  std::size_t n_on_obstruction = 0;  // the arch leans on the obstruction: between obstruction and walls
+  std::size_t n_upstream = 0;        // the mouth ran empty and the front does not touch the obstruction
+  double median_front_d = kNaN;      // median distance of the front from the gap centre, in nominal d
 };
 
 // J = <s> / (<T_flow> + <T_clog>).

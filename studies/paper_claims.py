@@ -4,8 +4,8 @@
     python3 studies/paper_claims.py [RESULTS_DIR] > results/claims.md
 
 Reads the points.csv that `gapflow report` wrote into RESULTS_DIR/flow-vs-distance,
-flow-vs-gap, screen-confirm and the re-test cylinder-peak-3d (a missing study is
-reported as missing) and
+flow-vs-gap, screen-confirm, the re-test cylinder-peak-3d and clog-location (where the
+clogs formed; a missing study is reported as missing) and
 RESULTS_DIR/restitution_2d/*.txt (studies/small_sweep.sh). The clogging study has no
 claim of the paper to hold; its report stands alone. Nothing here is typed in:
 every number comes from those files, every verdict from the rule printed next to it.
@@ -111,6 +111,57 @@ class Table:
         return "\n".join(out)
 
 
+LOCATION_RULE = ("held if every shape clogs at its closest position (flow-vs-distance) and, in clog-location, most "
+                 "located clogs at each shape's closest position lean on the obstruction (a sphere of the front the "
+                 "gap sees touches it: the arch stands between obstruction and walls), while the control (no "
+                 "obstruction, W/d 2.5) puts at least 90 % of its clogs at the gap; partly held if the shapes clog but "
+                 "where was not measured or most clogs formed elsewhere; not testable if the control fails")
+
+
+def located_text(r):
+    n = int(num(r, "clog_located_n"))
+    on, gap = int(num(r, "clog_on_obstruction_n")), int(num(r, "clog_at_gap_n"))
+    where = f"{r['series']} D = {fmt(num(r, 'obstruction.distance_mm'))} mm" if r["series"] != "narrow-gap" \
+        else "control (no obstruction, W/d 2.5)"
+    return f"{where}: {on} of {n} clogs on the obstruction, {gap} at the gap, {n - on - gap} upstream"
+
+
+def clog_location_claim(t, model, closest, loc):
+    """Clogging between obstruction and walls: that the shapes clog (flow-vs-distance) and where (clog-location)."""
+    clogged = [r for r in closest if num(r, "clog_n") > 0]
+    evidence = "; ".join(f"{r['series']} at its closest D = {fmt(num(r, 'obstruction.distance_mm'))} mm: "
+                         f"{int(num(r, 'clog_n'))} clogs, emptied in {int(num(r, 'J_paper_n'))} of "
+                         f"{int(num(r, 'n_runs'))}" for r in closest)
+    claim = "clogging appears between obstruction and walls (IV, Fig. 2b)"
+    # A report written before obstruction contact was measured has no clog_on_obstruction_n: not located.
+    rows = [r for r in loc or [] if r["model"] == model and num(r, "clog_located_n") > 0
+            and math.isfinite(num(r, "clog_on_obstruction_n"))]
+    control = [r for r in rows if r["series"] == "narrow-gap"]
+    shapes = {}
+    for r in rows:
+        if r["series"] != "narrow-gap":
+            shapes.setdefault(r["series"], []).append(r)
+    if not clogged:
+        t.add(claim, model, evidence, "not held", LOCATION_RULE)
+        return
+    if not control or not shapes:
+        t.add(claim, model, evidence + "; where the clogs formed: not measured (results/clog-location missing "
+              "or written before obstruction contact was measured)", "partly held", LOCATION_RULE)
+        return
+    evidence += "; where (clog-location): " + "; ".join(located_text(r) for r in control + sum(shapes.values(), []))
+    c = control[0]
+    if num(c, "clog_at_gap_n") < 0.9 * num(c, "clog_located_n"):
+        t.add(claim, model, evidence, "not testable", LOCATION_RULE)
+        return
+
+    def on_obstruction_share(r):
+        return num(r, "clog_on_obstruction_n") / num(r, "clog_located_n")
+    nearest = [min(rs, key=lambda r: num(r, "obstruction.distance_mm")) for rs in shapes.values()]
+    leaning = all(on_obstruction_share(r) > 0.5 for r in nearest)
+    held = leaning and len(clogged) == len(closest) and len(nearest) == len(closest)
+    t.add(claim, model, evidence, "held" if held else "partly held", LOCATION_RULE)
+
+
 def distance_claims(t, pts):
     if pts is None:
         t.add("Sec. IV (all)", "-", "results/flow-vs-distance/points.csv is missing", "not testable", "run the study")
@@ -131,14 +182,7 @@ def distance_claims(t, pts):
 
         # Clogging appears with an obstruction close to the gap (IV, Fig. 2b).
         closest = [rows[0] for rows in (cyl, a, v) if rows]
-        clogged = [r for r in closest if num(r, "clog_n") > 0]
-        t.add("clogging appears between obstruction and walls (IV, Fig. 2b)", model,
-              "; ".join(f"{r['series']} at its closest D = {fmt(num(r, 'obstruction.distance_mm'))} mm: "
-                        f"{int(num(r, 'clog_n'))} clogs, emptied in {int(num(r, 'J_paper_n'))} of "
-                        f"{int(num(r, 'n_runs'))}" for r in closest),
-              "partly held" if clogged else "not held",
-              "at most partly held: we measure that every shape clogs at its closest position while the board "
-              "without obstruction does not, not where the clog sits (only that no sphere crossed for 1 s)")
+        clog_location_claim(t, model, closest, read_points("clog-location"))
 
         # Waiting-room effect: a range of D with J significantly above J_0 (IV, Figs. 5-6).
         for label, rows, paper in (("cylinder", cyl, "peak above J_0 (waiting room)"),

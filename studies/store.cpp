@@ -48,14 +48,19 @@ CREATE TABLE IF NOT EXISTS avalanches (
 );
 CREATE TABLE IF NOT EXISTS clogs (
   job_key TEXT NOT NULL REFERENCES runs(job_key), idx INTEGER NOT NULL, t_start_s REAL NOT NULL,
-  duration_s REAL NOT NULL, censored INTEGER NOT NULL, front_m REAL,
+  duration_s REAL NOT NULL, censored INTEGER NOT NULL, front_m REAL, on_obstruction INTEGER,
   PRIMARY KEY (job_key, idx)
 );
 )sql";
 
-// Added to schema version 1 later (Clog::front_m): a store written before it gets
-// the column when it is next written to; its older clogs read back without a front.
-constexpr const char* kClogFrontColumn = "ALTER TABLE clogs ADD COLUMN front_m REAL";
+// Added to schema version 1 later (Clog::front_m, then Clog::on_obstruction): a store
+// written before gets the columns when it is next written to; its older clogs read back
+// without them (NULL).
+struct AddedColumn {
+  const char* name;
+  const char* definition;
+};
+constexpr AddedColumn kAddedClogColumns[] = {{"front_m", "REAL"}, {"on_obstruction", "INTEGER"}};
 
 // Added to schema version 1 later: created when first written, so older stores stay readable.
 constexpr const char* kStudyFilesSchema = R"sql(
@@ -94,7 +99,8 @@ class Statement {
   Statement& bind(int i, int v) { return check(sqlite3_bind_int64(s_, i, v)); }
   Statement& bind(int i, bool v) { return check(sqlite3_bind_int64(s_, i, v ? 1 : 0)); }
   Statement& bind(int i, double v) { return check(sqlite3_bind_double(s_, i, v)); }
-  Statement& bind(int i, const std::optional<double>& v) {
+  template <class T>
+  Statement& bind(int i, const std::optional<T>& v) {
     return v ? bind(i, *v) : check(sqlite3_bind_null(s_, i));
   }
 
@@ -135,6 +141,10 @@ class Statement {
   std::optional<double> optional_real(int c) const {
     if (type(c) == SQLITE_NULL) return std::nullopt;
     return real(c);
+  }
+  std::optional<bool> optional_bool(int c) const {
+    if (type(c) == SQLITE_NULL) return std::nullopt;
+    return integer(c) != 0;
   }
 
  private:
@@ -194,25 +204,33 @@ void insert_children(sqlite3* db, const std::string& key, const RunRecord& r) {
     const Avalanche& v = r.avalanches[i];
     a.bind_all(key, static_cast<int>(i), v.size, v.t_start, v.t_end, v.first, v.censored).run();
   }
-  if (!has_column(db, "clogs", "front_m")) exec(db, kClogFrontColumn);
-  Statement k(db, "INSERT INTO clogs (job_key, idx, t_start_s, duration_s, censored, front_m) VALUES (?, ?, ?, ?, ?, ?)");
+  for (const AddedColumn& c : kAddedClogColumns)
+    if (!has_column(db, "clogs", c.name)) exec(db, fmt::format("ALTER TABLE clogs ADD COLUMN {} {}", c.name, c.definition).c_str());
+  Statement k(db, "INSERT INTO clogs (job_key, idx, t_start_s, duration_s, censored, front_m, on_obstruction) "
+                  "VALUES (?, ?, ?, ?, ?, ?, ?)");
   for (std::size_t i = 0; i < r.clogs.size(); ++i) {
     const Clog& v = r.clogs[i];
-    k.bind_all(key, static_cast<int>(i), v.t_start, v.duration, v.censored, v.front_m).run();
+    k.bind_all(key, static_cast<int>(i), v.t_start, v.duration, v.censored, v.front_m, v.on_obstruction).run();
   }
 }
 
-void load_children(sqlite3* db, const std::string& key, bool with_clog_fronts, RunRecord& r) {
+// The clog columns to select: an added column a store does not have yet reads as NULL.
+std::string clog_columns(sqlite3* db) {
+  std::string columns = "t_start_s, duration_s, censored";
+  for (const AddedColumn& c : kAddedClogColumns) columns += has_column(db, "clogs", c.name) ? fmt::format(", {}", c.name) : ", NULL";
+  return columns;
+}
+
+void load_children(sqlite3* db, const std::string& key, const std::string& clog_columns, RunRecord& r) {
   Statement c(db, "SELECT id, t_s, x_m FROM crossings WHERE job_key = ? ORDER BY rowid");
   c.bind(1, key);
   while (c.step()) r.crossings.push_back({c.integer(0), c.real(1), c.real(2)});
   Statement a(db, "SELECT size, t_start_s, t_end_s, \"first\", censored FROM avalanches WHERE job_key = ? ORDER BY idx");
   a.bind(1, key);
   while (a.step()) r.avalanches.push_back({a.integer(0), a.real(1), a.real(2), a.integer(3) != 0, a.integer(4) != 0});
-  Statement k(db, with_clog_fronts ? "SELECT t_start_s, duration_s, censored, front_m FROM clogs WHERE job_key = ? ORDER BY idx"
-                                   : "SELECT t_start_s, duration_s, censored, NULL FROM clogs WHERE job_key = ? ORDER BY idx");
+  Statement k(db, fmt::format("SELECT {} FROM clogs WHERE job_key = ? ORDER BY idx", clog_columns).c_str());
   k.bind(1, key);
-  while (k.step()) r.clogs.push_back({k.real(0), k.real(1), k.integer(2) != 0, k.optional_real(3)});
+  while (k.step()) r.clogs.push_back({k.real(0), k.real(1), k.integer(2) != 0, k.optional_real(3), k.optional_bool(4)});
 }
 
 // One CSV field (RFC 4180 quoting).
@@ -348,8 +366,8 @@ std::vector<StoredRun> Store::load(const std::optional<std::string>& study) cons
     r.incline_rad = s.real(c++), r.time_step_s = s.real(c++), run.finished_at = s.text(c++);
     out.push_back(std::move(run));
   }
-  const bool with_clog_fronts = has_column(db_, "clogs", "front_m");
-  for (StoredRun& run : out) load_children(db_, run.id.key, with_clog_fronts, run.record);
+  const std::string columns = clog_columns(db_);
+  for (StoredRun& run : out) load_children(db_, run.id.key, columns, run.record);
   return out;
 }
 

@@ -314,6 +314,53 @@ TEST(PaperClaims, APeakIsHeldOnlyIfItsReTestReproducesIt) {
   EXPECT_NE(confirmed.find("**held**"), std::string::npos) << confirmed;
 }
 
+// studies/paper_claims.py: "clogging appears between obstruction and walls" is held only
+// where most clogs at the closest position lean on the obstruction (clog-location) and the
+// control, a narrow gap without obstruction, puts its clogs at the gap (else the locator is
+// not trusted). A report written before obstruction contact was measured locates nothing.
+TEST(PaperClaims, ClogsBetweenObstructionAndWallsNeedTheirLocationAndAWorkingControl) {
+  const auto python = find_python_with_matplotlib();
+  if (!python) GTEST_SKIP() << "no python3 with matplotlib found";
+  TempDir dir;
+  fs::create_directories(dir / "flow-vs-distance");
+  write_text(dir / "flow-vs-distance" / "points.csv",
+             "series,model,n_runs,J_paper_n,J_paper_mean,clog_n,obstruction.distance_mm,D_over_d,d_mm,verdict\n"
+             "none,2d,4,4,91,0,,0,7.75,\n"
+             "cylinder,2d,4,0,,30,70,9.03,7.75,insufficient data\n");
+  int call = 0;
+  // control_at_gap / cylinder_on_obstruction: counts of 10 located clogs; "" = no clog-location study.
+  auto verdict_with = [&](const std::string& control_at_gap, const std::string& cylinder_on_obstruction,
+                          bool with_contact_column = true) {
+    if (!control_at_gap.empty()) {
+      fs::create_directories(dir / "clog-location");
+      const std::string contact_header = with_contact_column ? ",clog_on_obstruction_n" : "";
+      const std::string control_on = with_contact_column ? ",0" : "";
+      const std::string cylinder_on = with_contact_column ? "," + cylinder_on_obstruction : "";
+      write_text(dir / "clog-location" / "points.csv",
+                 "series,model,n_runs,clog_n,clog_located_n,clog_at_gap_n,obstruction.distance_mm" + contact_header +
+                     "\n"
+                     "narrow-gap,2d,4,10,10," + control_at_gap + "," + control_on + "\n"
+                     "cylinder,2d,4,10,10,0,70" + cylinder_on + "\n");
+    }
+    const fs::path out = dir / fmt::format("claims_{}.md", ++call);
+    const int rc = run_program({*python, (fs::path(GAPFLOW_SOURCE_DIR) / "studies" / "paper_claims.py").string(),
+                                dir.path().string()},
+                               out);
+    EXPECT_EQ(rc, 0) << read_text(out);
+    const std::string md = read_text(out);
+    const auto line = md.find("| clogging appears between obstruction and walls (IV, Fig. 2b) | 2d |");
+    EXPECT_NE(line, std::string::npos) << md;
+    const std::string row = md.substr(line, md.find('\n', line) - line);
+    const auto v = row.find("**");
+    return row.substr(v + 2, row.find("**", v + 2) - v - 2);
+  };
+  EXPECT_EQ(verdict_with("", ""), "partly held") << "location not measured";
+  EXPECT_EQ(verdict_with("10", "9"), "held") << "9 of 10 on the obstruction, control at the gap";
+  EXPECT_EQ(verdict_with("10", "2"), "partly held") << "most clogs elsewhere";
+  EXPECT_EQ(verdict_with("5", "9"), "not testable") << "the control does not clog at the gap";
+  EXPECT_EQ(verdict_with("10", "9", false), "partly held") << "written before obstruction contact was measured";
+}
+
 TEST_F(ReportTiny, EveryAnalysisKindRunsOnRealDataWithoutCrashing) {
   const std::string study = read_text(*request.study);
   for (const char* kind : {"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"}) {

@@ -201,26 +201,63 @@ TEST(Sim2DRun, NarrowGapWithoutShakingClogsPermanently) {
   // Without an obstruction the flow can only stop at the gap: every clog is located there.
   for (const Clog& c : r.clogs) {
     ASSERT_TRUE(c.front_m);
-    EXPECT_TRUE(clog_at_gap(*c.front_m, sc.gap, sc.nominal_diameter)) << *c.front_m / sc.nominal_diameter << " d";
+    EXPECT_EQ(clog_site(c, sc.gap, sc.nominal_diameter), ClogSite::gap) << *c.front_m / sc.nominal_diameter << " d";
   }
+}
+
+// A small unshaken board (300 spheres) run in 2D until it clogs for good (3 s without a
+// crossing, 20 s at most), and the site of each of its clogs.
+struct ClogSites {
+  CompiledScenario scenario;
+  RunRecord record;
+  std::vector<ClogSite> sites;  // one per clog, every clog located
+};
+ClogSites clog_sites_of_small_run(const std::string& file, std::vector<std::string> overrides) {
+  for (const char* o : {"particles.count=300", "shaking.walls.enabled=false", "shaking.obstruction.enabled=false",
+                        "run.stop_after_no_flow_s=3", "run.time_limit_s=20"})
+    overrides.emplace_back(o);
+  ClogSites out{compile_file(file, overrides), {}, {}};
+  Session2D s(out.scenario);
+  out.record = run_simulation(out.scenario, s);
+  for (const Clog& c : out.record.clogs) {
+    const auto site = clog_site(c, out.scenario.gap, out.scenario.nominal_diameter);
+    EXPECT_TRUE(site) << "every clog is located";
+    if (site) out.sites.push_back(*site);
+  }
+  return out;
+}
+
+// The same narrow gap with the cylinder far upstream (150 mm): the arch forms across the
+// gap and hides the obstruction; no clog may be put on the obstruction.
+TEST(Sim2DRun, ANarrowGapClogsAtTheGapEvenWithAnObstructionFarUpstream) {
+  const ClogSites run =
+      clog_sites_of_small_run("scenarios/paper/cylinder.toml", {"obstruction.distance_mm=150", "bottleneck.gap_mm=19.4"});
+  ASSERT_FALSE(run.sites.empty());
+  EXPECT_EQ(run.sites, std::vector<ClogSite>(run.sites.size(), ClogSite::gap));
+}
+
+// The paper's A at its closest (5 mm to its centroid; its base 0.7 mm above the gap line,
+// over the gap centre): the spheres arch between the A's flanks and the bottleneck walls,
+// within W/2 + d of the gap centre, where the front distance alone would say "at the gap".
+TEST(Sim2DRun, AClogBesideTheCloseAIsLocatedOnTheObstruction) {
+  const ClogSites run = clog_sites_of_small_run("scenarios/paper/a_obstruction.toml", {"obstruction.distance_mm=5"});
+  ASSERT_FALSE(run.sites.empty());
+  EXPECT_EQ(run.sites, std::vector<ClogSite>(run.sites.size(), ClogSite::obstruction));
+  for (const Clog& c : run.record.clogs)
+    EXPECT_TRUE(clog_at_gap(*c.front_m, run.scenario.gap, run.scenario.nominal_diameter));
 }
 
 // The cylinder at 70 mm leaves passages of ~1.2 d between itself and the bottleneck
 // walls (W/d = 4.3 at the gap): the flow stops in those passages, the gap's mouth
-// runs empty, and the clog is located upstream, within the cylinder's height.
-TEST(Sim2DRun, AClogBetweenACloseCylinderAndTheWallsIsLocatedUpstream) {
-  const CompiledScenario sc =
-      compile_file("scenarios/paper/cylinder.toml",
-                   {"obstruction.distance_mm=70", "particles.count=300", "shaking.walls.enabled=false",
-                    "shaking.obstruction.enabled=false", "run.stop_after_no_flow_s=3", "run.time_limit_s=20"});
-  Session2D s(sc);
-  const RunRecord r = run_simulation(sc, s);
-  EXPECT_EQ(r.regime, Regime::clogged);
-  ASSERT_FALSE(r.clogs.empty());
-  const double radius = sc.def.obstruction.diameter_mm * 1e-3 / 2, centre = sc.def.obstruction.distance_mm * 1e-3;
-  for (const Clog& c : r.clogs) {
-    ASSERT_TRUE(c.front_m);
-    EXPECT_FALSE(clog_at_gap(*c.front_m, sc.gap, sc.nominal_diameter)) << *c.front_m / sc.nominal_diameter << " d";
+// runs empty, the front lies within the cylinder's height and leans on it.
+TEST(Sim2DRun, AClogBetweenACloseCylinderAndTheWallsIsLocatedOnTheObstruction) {
+  const ClogSites run = clog_sites_of_small_run("scenarios/paper/cylinder.toml", {"obstruction.distance_mm=70"});
+  EXPECT_EQ(run.record.regime, Regime::clogged);
+  ASSERT_FALSE(run.sites.empty());
+  EXPECT_EQ(run.sites, std::vector<ClogSite>(run.sites.size(), ClogSite::obstruction));
+  const ObstructionDef& o = run.scenario.def.obstruction;
+  const double radius = o.diameter_mm * 1e-3 / 2, centre = o.distance_mm * 1e-3;
+  for (const Clog& c : run.record.clogs) {
     EXPECT_GT(*c.front_m, centre - radius);
     EXPECT_LT(*c.front_m, centre + radius);
   }

@@ -189,7 +189,7 @@ RunRecord sample_record() {
   r.j_mid = 0.1 + 0.2;
   r.crossings = {{3, 0.5, -0.001}, {0, 0.75, 0.002}, {4, 2.5, 0.0}, {1, 2.6, 1e-17}, {3, 2.7, 0.001}};  // 3 re-injected
   r.avalanches = {{2, 0.5, 0.75, true, false}, {2, 2.5, 2.6, false, true}};
-  r.clogs = {{0.75, 1.75, false, 0.0171234567890123}, {2.6, 9.745678901234567, true, std::nullopt}};  // one front measured
+  r.clogs = {{0.75, 1.75, false, 0.0171234567890123, true}, {2.6, 9.745678901234567, true}};  // one front measured
   return r;
 }
 
@@ -238,6 +238,7 @@ void expect_same_record(const RunRecord& a, const RunRecord& b) {
     EXPECT_EQ(a.clogs[i].duration, b.clogs[i].duration) << i;
     EXPECT_EQ(a.clogs[i].censored, b.clogs[i].censored) << i;
     EXPECT_EQ(a.clogs[i].front_m, b.clogs[i].front_m) << i;
+    EXPECT_EQ(a.clogs[i].on_obstruction, b.clogs[i].on_obstruction) << i;
   }
 }
 
@@ -551,9 +552,10 @@ TEST(StudyStore, RoundTripsARecordWithChildRows) {
   EXPECT_TRUE(store.load("other").empty());
 }
 
-// A store written before clogs had a front (no front_m column) stays readable, and
-// gets the column when next written to.
-TEST(StudyStore, ReadsClogsWithoutAFrontFromAStoreWrittenBeforeIt) {
+// A store written before clogs were located (no front_m, no on_obstruction column), or
+// before on_obstruction alone, stays readable, and gets the columns when next written to.
+namespace {
+void expect_older_store_reads_back(const std::vector<std::string>& dropped_columns) {
   TempDir dir;
   JobIdentity old_id = sample_identity();
   {
@@ -563,14 +565,18 @@ TEST(StudyStore, ReadsClogsWithoutAFrontFromAStoreWrittenBeforeIt) {
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "runs.sqlite").c_str(), &db), SQLITE_OK);
-    ASSERT_EQ(sqlite3_exec(db, "ALTER TABLE clogs DROP COLUMN front_m", nullptr, nullptr, nullptr), SQLITE_OK);
+    for (const std::string& column : dropped_columns)
+      ASSERT_EQ(sqlite3_exec(db, ("ALTER TABLE clogs DROP COLUMN " + column).c_str(), nullptr, nullptr, nullptr),
+                SQLITE_OK);
     sqlite3_close(db);
   }
+  const bool front_kept = dropped_columns.size() == 1;
   Store store(dir / "runs.sqlite");
   std::vector<StoredRun> runs = store.load("s");
   ASSERT_EQ(runs.size(), 1u);
   ASSERT_EQ(runs[0].record.clogs.size(), 2u);
-  EXPECT_FALSE(runs[0].record.clogs[0].front_m) << "not measured then";
+  EXPECT_EQ(runs[0].record.clogs[0].front_m.has_value(), front_kept);
+  EXPECT_FALSE(runs[0].record.clogs[0].on_obstruction) << "not measured then";
   JobIdentity new_id = sample_identity();
   new_id.key = "fedcba9876543210";
   store.put(new_id, sample_record());
@@ -579,7 +585,17 @@ TEST(StudyStore, ReadsClogsWithoutAFrontFromAStoreWrittenBeforeIt) {
   const RunRecord& fresh = runs[0].id.key == new_id.key ? runs[0].record : runs[1].record;
   const RunRecord& old = runs[0].id.key == new_id.key ? runs[1].record : runs[0].record;
   expect_same_record(fresh, sample_record());
-  EXPECT_FALSE(old.clogs[0].front_m);
+  EXPECT_EQ(old.clogs[0].front_m.has_value(), front_kept);
+  EXPECT_FALSE(old.clogs[0].on_obstruction);
+}
+}  // namespace
+
+TEST(StudyStore, ReadsClogsWithoutAFrontFromAStoreWrittenBeforeIt) {
+  expect_older_store_reads_back({"on_obstruction", "front_m"});
+}
+
+TEST(StudyStore, ReadsClogsWithAFrontButNoObstructionContactFromAStoreWrittenBeforeIt) {
+  expect_older_store_reads_back({"on_obstruction"});
 }
 
 TEST(StudyStore, ExportsCsvWithQuotingAndNulls) {
