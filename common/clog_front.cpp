@@ -4,13 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace gapflow {
 
 std::vector<int> visible_from(const ObstructionGeometry& obstruction, const std::vector<BoardDisc>& discs, Vec2 eye) {
-  // A disc q can cut the segment from p to the eye only if its near edge is closer to
-  // the eye than p: scan candidate occluders in order of distance and stop past |p| + r_max.
+  // A disc q can cut the segment from p to the eye only if |q - eye| < |p - eye| + r_q
+  // <= |p - eye| + r_max: scan candidate occluders in order of distance and stop past that.
   std::vector<double> reach(discs.size());
   double r_max = 0;
   for (size_t i = 0; i < discs.size(); ++i) {
@@ -39,10 +40,14 @@ std::vector<int> visible_from(const ObstructionGeometry& obstruction, const std:
   return visible;
 }
 
-std::vector<int> visible_from_gap(const CompiledScenario& sc, const std::vector<BoardDisc>& discs) {
+namespace {
+
+// For each of `discs`, whether the gap sees it (visible_from_gap).
+std::vector<char> seen_from_gap(const CompiledScenario& sc, const ObstructionGeometry& obstruction,
+                                const std::vector<BoardDisc>& discs) {
   const int points = static_cast<int>(std::ceil(2 * sc.gap / sc.nominal_diameter)) + 1;
-  std::vector<bool> seen(discs.size(), false);
-  std::vector<size_t> index_of_id;  // ids are small non-negative integers (particle indices)
+  std::vector<char> seen(discs.size(), 0);
+  std::vector<size_t> index_of_id;  // ids are particle indices: small, non-negative, unique
   for (size_t i = 0; i < discs.size(); ++i) {
     const auto id = static_cast<size_t>(discs[i].id);
     if (index_of_id.size() <= id) index_of_id.resize(id + 1);
@@ -50,12 +55,30 @@ std::vector<int> visible_from_gap(const CompiledScenario& sc, const std::vector<
   }
   for (int k = 0; k < points; ++k) {
     const Vec2 eye{-sc.gap / 2 + (k + 0.5) * sc.gap / points, 0};
-    for (int id : visible_from(sc.obstruction, discs, eye)) seen[index_of_id[static_cast<size_t>(id)]] = true;
+    for (int id : visible_from(obstruction, discs, eye)) seen[index_of_id[static_cast<size_t>(id)]] = 1;
   }
+  return seen;
+}
+
+}  // namespace
+
+std::vector<int> visible_from_gap(const CompiledScenario& sc, const ObstructionGeometry& obstruction,
+                                  const std::vector<BoardDisc>& discs) {
+  const std::vector<char> seen = seen_from_gap(sc, obstruction, discs);
   std::vector<int> out;
   for (size_t i = 0; i < discs.size(); ++i)
     if (seen[i]) out.push_back(discs[i].id);
   return out;
+}
+
+ObstructionGeometry displaced(const ObstructionGeometry& g, Vec2 offset) {
+  ObstructionGeometry moved = g;
+  moved.circle.centre = g.circle.centre + offset;
+  for (Vec2& v : moved.polygon.vertices) v = v + offset;
+  moved.reference_point = g.reference_point + offset;
+  moved.centroid = g.centroid + offset;
+  moved.nearest_y = g.nearest_y + offset.y;
+  return moved;
 }
 
 bool touches_obstruction(const ObstructionGeometry& obstruction, const BoardDisc& disc, double tolerance_m) {
@@ -63,9 +86,61 @@ bool touches_obstruction(const ObstructionGeometry& obstruction, const BoardDisc
   return obstruction_distance(obstruction, disc.centre) - disc.radius <= tolerance_m;
 }
 
-double obstruction_contact_tolerance(const CompiledScenario& sc) {
-  const ShakeDef& shake = sc.def.shaking.obstruction;
-  return 0.1 * sc.nominal_diameter + (shake.enabled ? shake.amplitude_mm * 1e-3 : 0.0);
+namespace {
+
+// Distance (m) from a point to one side's walls: the bottleneck wall's inner face
+// (moved by its shaking offset) and, above the funnel, the retaining wall.
+double distance_to_side(const CompiledScenario& sc, Vec2 p, double side, Vec2 tip, Vec2 offset) {
+  const Vec2 top{side * sc.channel_width / 2, sc.funnel_height};
+  double d = distance_to_segment(p, tip + offset, top + offset);
+  if (p.y >= sc.funnel_height) d = std::min(d, sc.channel_width / 2 - side * p.x);
+  return d;
+}
+
+// Indices of the discs reachable from `start` through touching discs.
+std::vector<char> reachable(const std::vector<BoardDisc>& discs, const std::vector<char>& start, double tolerance) {
+  std::vector<char> reached = start;
+  std::vector<size_t> todo;
+  for (size_t i = 0; i < discs.size(); ++i)
+    if (start[i]) todo.push_back(i);
+  while (!todo.empty()) {
+    const size_t i = todo.back();
+    todo.pop_back();
+    for (size_t j = 0; j < discs.size(); ++j)
+      if (!reached[j] &&
+          length(discs[i].centre - discs[j].centre) <= discs[i].radius + discs[j].radius + tolerance) {
+        reached[j] = 1;
+        todo.push_back(j);
+      }
+  }
+  return reached;
+}
+
+}  // namespace
+
+bool front_leans_on_obstruction(const CompiledScenario& sc, const std::vector<BoardDisc>& board,
+                                const ShakeOffsets& offsets) {
+  if (sc.obstruction.shape == ObstructionShape::none) return false;
+  const ObstructionGeometry obstruction = displaced(sc.obstruction, offsets.obstruction);
+  const std::vector<char> seen = seen_from_gap(sc, obstruction, board);
+  std::vector<BoardDisc> front;
+  for (size_t i = 0; i < board.size(); ++i)
+    if (seen[i]) front.push_back(board[i]);
+  const double tolerance = kContactTolerance_d * sc.nominal_diameter;
+  std::vector<char> on_left(front.size()), on_right(front.size()), on_obstruction(front.size());
+  for (size_t i = 0; i < front.size(); ++i) {
+    const BoardDisc& b = front[i];
+    on_left[i] = distance_to_side(sc, b.centre, -1, sc.left_tip, offsets.left_wall) - b.radius <= tolerance;
+    on_right[i] = distance_to_side(sc, b.centre, +1, sc.right_tip, offsets.right_wall) - b.radius <= tolerance;
+    on_obstruction[i] = touches_obstruction(obstruction, b, tolerance);
+  }
+  const std::vector<char> from_left = reachable(front, on_left, tolerance);
+  for (size_t i = 0; i < front.size(); ++i)
+    if (from_left[i] && on_right[i]) return false;  // an arch from wall to wall
+  const std::vector<char> from_obstruction = reachable(front, on_obstruction, tolerance);
+  for (size_t i = 0; i < front.size(); ++i)
+    if (from_obstruction[i] && (on_left[i] || on_right[i])) return true;
+  return false;
 }
 
 }  // namespace gapflow

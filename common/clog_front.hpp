@@ -1,19 +1,18 @@
 // The front of a stopped flow, seen from the gap: which particles block it, and
-// whether they lean on the obstruction.
+// whether their arch leans on the obstruction.
 //
 // The front is the set of particles on the board that the gap sees: a free line
 // of sight to some point of the gap line, with no other particle's disc and not
-// the obstruction on the segment between. When the flow has stopped they are the
-// lowest arch (its spheres face the gap) and whatever the gap sees past its
-// ends. Murray & Alonso-Marroquin (2016, Sec. IV, Fig. 2b) report that with an
-// obstruction close to the gap "clogging appears between the obstruction and the
-// walls": an arch with one foot on the obstruction, i.e. a front particle that
-// touches it. The gap monitor classifies each clog by it (common/measurement.hpp);
-// the local-perturbation protocol lifts what the gap centre sees near the gap
-// (common/protocols.hpp).
+// the obstruction on the segment between. When the flow has stopped, the lowest
+// arch is among them. Murray & Alonso-Marroquin (2016, Sec. IV, Fig. 2b) report
+// that with an obstruction close to the gap "clogging appears between the
+// obstruction and the walls": an arch with one foot on the obstruction and the
+// other on a wall, instead of one from wall to wall. The gap monitor classifies
+// each clog by the contact chains of its front (common/measurement.hpp).
 #pragma once
 
 #include "common/geometry.hpp"
+#include "common/shaking.hpp"
 
 #include <vector>
 
@@ -25,24 +24,35 @@ struct BoardDisc {
   double radius;  // m
 };
 
-// The ids of `discs` with a free line of sight to `viewpoint` (plane frame, m);
-// every disc in `discs` may hide another, and so does the obstruction (rest
-// position). Ids are returned in the order of `discs`.
-std::vector<int> visible_from(const ObstructionGeometry& obstruction, const std::vector<BoardDisc>& discs, Vec2 viewpoint);
+// Two outlines closer than this (in nominal diameters) touch: contacts overlap or
+// part by a little in both engines (Box2D's skin is ~0.01 d).
+constexpr double kContactTolerance_d = 0.1;
+
+// The ids of `discs` with a free line of sight to `eye` (plane frame, m); every
+// disc in `discs` may hide another, and so does `obstruction`. Ids in the order of `discs`.
+std::vector<int> visible_from(const ObstructionGeometry& obstruction, const std::vector<BoardDisc>& discs, Vec2 eye);
 
 // The ids of `discs` that the gap sees: visible from at least one of the points
 // spread along the gap line (y = 0, |x| < W/2) no more than d/2 apart. One point
 // is not enough: an obstruction close to the gap hides everything from the gap
 // centre while the arches beside it face the gap's ends. Ids in the order of `discs`.
-std::vector<int> visible_from_gap(const CompiledScenario& sc, const std::vector<BoardDisc>& discs);
+std::vector<int> visible_from_gap(const CompiledScenario& sc, const ObstructionGeometry& obstruction,
+                                  const std::vector<BoardDisc>& discs);
 
-// Whether a disc touches the obstruction: the gap between their outlines is at
-// most `tolerance_m` (contacts overlap or part by a little, and a shaken
-// obstruction is up to its amplitude off its rest position).
+// The obstruction moved by a shaking displacement (m).
+ObstructionGeometry displaced(const ObstructionGeometry& g, Vec2 offset);
+
+// Whether a disc's outline is within `tolerance_m` of the obstruction's.
 bool touches_obstruction(const ObstructionGeometry& obstruction, const BoardDisc& disc, double tolerance_m);
 
-// The tolerance for touches_obstruction in a scenario: 0.1 d plus the
-// obstruction's shaking amplitude when it is shaken.
-double obstruction_contact_tolerance(const CompiledScenario& sc);
+// Whether the arch of a stopped flow leans on the obstruction, judged from the
+// front (the discs the gap sees, with the walls and obstruction where the shaking
+// schedule has them at that moment). Discs, walls and obstruction within
+// kContactTolerance_d of each other touch. True when a chain of touching front
+// discs links the obstruction to a wall (bottleneck or retaining) and no chain
+// links the two walls without it: an arch from wall to wall that merely rests on
+// the obstruction is an arch across the gap, not one between obstruction and walls.
+bool front_leans_on_obstruction(const CompiledScenario& sc, const std::vector<BoardDisc>& board,
+                                const ShakeOffsets& offsets);
 
 }  // namespace gapflow

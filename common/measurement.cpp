@@ -94,18 +94,14 @@ double GapMonitor::nearest_to_gap_m() const {
   return nearest;
 }
 
-bool GapMonitor::front_on_obstruction() const {
+bool GapMonitor::front_on_obstruction(double t) const {
   if (sc_.obstruction.shape == ObstructionShape::none) return false;
-  auto disc_of = [&](size_t id) {
-    return BoardDisc{static_cast<int>(id), state_[id].last, sc_.particles[id].diameter / 2};
-  };
   std::vector<BoardDisc> board;
   for (size_t i = 0; i < state_.size(); ++i)
-    if (!state_[i].passed && !state_[i].escaped) board.push_back(disc_of(i));
-  const double tolerance = obstruction_contact_tolerance(sc_);
-  for (int id : visible_from_gap(sc_, board))
-    if (touches_obstruction(sc_.obstruction, disc_of(static_cast<size_t>(id)), tolerance)) return true;
-  return false;
+    if (!state_[i].passed && !state_[i].escaped)
+      board.push_back({static_cast<int>(i), state_[i].last, sc_.particles[i].diameter / 2});
+  // The engines put the shaken walls and obstruction on schedule at the end of each step.
+  return front_leans_on_obstruction(sc_, board, shake_offsets(sc_.def.shaking, t));
 }
 
 // Once per quiet period, at the step that makes it a clog: the positions are this
@@ -114,7 +110,7 @@ void GapMonitor::locate_clog(double t) {
   if (t - last_crossing_t_ < sc_.def.run.clog_timeout_s) return;
   if (!clog_fronts_.empty() && clog_fronts_.back().t_start == last_crossing_t_) return;
   if (inside_ == 0) return;  // nothing left on the board: the discharge ended, not a clog
-  clog_fronts_.push_back({last_crossing_t_, nearest_to_gap_m(), front_on_obstruction()});
+  clog_fronts_.push_back({last_crossing_t_, nearest_to_gap_m(), front_on_obstruction(t)});
 }
 
 bool clog_at_gap(double front_m, double gap_m, double diameter_m) { return front_m <= gap_m / 2 + diameter_m; }

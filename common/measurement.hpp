@@ -53,11 +53,11 @@ class GapMonitor {
   struct ClogFront {
     double t_start = 0;  // s, the last crossing before the clog (as Clog::t_start)
     double front_m = 0;           // m, nearest particle on the board to the gap centre at detection
-    bool on_obstruction = false;  // a particle of the front touches the obstruction (common/clog_front.hpp)
+    bool on_obstruction = false;  // the front's arch leans on the obstruction (common/clog_front.hpp)
   };
   void locate_clog(double t);
   double nearest_to_gap_m() const;
-  bool front_on_obstruction() const;
+  bool front_on_obstruction(double t) const;
 
   struct State {
     bool seen = false;
@@ -90,10 +90,10 @@ bool clog_at_gap(double front_m, double gap_m, double diameter_m);
 
 // Where a clog formed, from what was measured at its detection (empty if its front
 // was not measured):
-//  * obstruction: the arch leans on the obstruction (Clog::on_obstruction): the flow
-//    stopped between the obstruction and the walls, wherever that is; with the
-//    obstruction within reach of the gap this is the only way to tell it from an arch
-//    across the gap, since both keep the gap's mouth occupied;
+//  * obstruction: the arch leans on the obstruction (Clog::on_obstruction,
+//    front_leans_on_obstruction): the flow stopped between the obstruction and the
+//    walls, wherever that is; with the obstruction within reach of the gap this is the
+//    only way to tell it from an arch across the gap, since both keep the mouth occupied;
 //  * gap: otherwise, when the gap's mouth is occupied (clog_at_gap);
 //  * upstream: otherwise (the mouth ran empty and no front particle touches the obstruction).
 // A record made before on_obstruction was measured is classified by its front alone (gap or upstream).

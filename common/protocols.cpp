@@ -66,7 +66,9 @@ std::vector<int> ClogProtocol::gap_blockers(const std::vector<ActiveParticle>& b
   std::vector<BoardDisc> near;
   for (const ActiveParticle& p : board)
     if (length(p.position) <= reach) near.push_back({p.id, p.position, radius_of(sc_, p.id)});
-  return visible_from(sc_.obstruction, near, Vec2{0, 0});
+  // Only the discs hide one another here, as when the protocol was first run (the clogging
+  // studies, without an obstruction): the obstruction hides nothing from this protocol.
+  return visible_from(ObstructionGeometry{}, near, Vec2{0, 0});
 }
 
 void ClogProtocol::move(EngineSession& session, GapMonitor& monitor, const std::vector<int>& ids,

@@ -39,7 +39,8 @@ class ClogProtocol {
   // the initial packing upward, shuffled within a row, clear of every particle on the board.
   std::vector<Vec2> sites_on_top(const std::vector<ActiveParticle>& on_board, std::size_t count);
   // The particles (ids) within W/2 + perturb_radius_d d of the gap centre with a free line of
-  // sight to it (visible_from in common/clog_front.hpp).
+  // sight to it past the other particles (visible_from in common/clog_front.hpp; the
+  // obstruction is not an occluder here).
   std::vector<int> gap_blockers(const std::vector<ActiveParticle>& on_board) const;
 
  private:

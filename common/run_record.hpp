@@ -36,9 +36,10 @@ struct Clog {
   // W/2 + d (clog_at_gap); a clog upstream (e.g. between obstruction and walls)
   // leaves the gap's mouth empty. Empty for records made before it was measured.
   std::optional<double> front_m = std::nullopt;
-  // Whether the arch leans on the obstruction: a particle of the front (a free line of
-  // sight to the gap centre, common/clog_front.hpp) touches it at detection. False
-  // without an obstruction; empty for records made before it was measured.
+  // Whether the arch leans on the obstruction at detection: a chain of touching front
+  // particles (those the gap line sees) links it to a wall and none links the two walls
+  // without it (front_leans_on_obstruction, common/clog_front.hpp). False without an
+  // obstruction; empty for records made before it was measured.
   std::optional<bool> on_obstruction = std::nullopt;
 };
 

@@ -55,6 +55,7 @@ ClogStatistics clog_statistics(const std::vector<RunRecord>& runs, double hill_t
       all.push_back(cl.duration);
       if (const auto site = clog_site(cl, r.gap_m, r.diameter_m)) {
         fronts_d.push_back(*cl.front_m / r.diameter_m);
+        if (!cl.on_obstruction) ++c.n_contact_not_measured;
         switch (*site) {
           case ClogSite::gap: ++c.n_at_gap; break;
           case ClogSite::obstruction: ++c.n_on_obstruction; break;

@@ -49,7 +49,10 @@ struct ClogStatistics {
   std::size_t n_located = 0;
   std::size_t n_at_gap = 0;          // an arch across the gap: mouth occupied, obstruction not touched
   std::size_t n_on_obstruction = 0;  // the arch leans on the obstruction: between obstruction and walls
-  std::size_t n_upstream = 0;        // the mouth ran empty and the front does not touch the obstruction
+  std::size_t n_upstream = 0;        // the mouth ran empty and the arch does not lean on the obstruction
+  // Located by their front distance alone (records made before Clog::on_obstruction was
+  // measured): counted in n_at_gap or n_upstream, and so n_on_obstruction is not known.
+  std::size_t n_contact_not_measured = 0;
   double median_front_d = kNaN;      // median distance of the front from the gap centre, in nominal d
 };
 

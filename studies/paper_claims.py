@@ -111,19 +111,47 @@ class Table:
         return "\n".join(out)
 
 
-LOCATION_RULE = ("held if every shape clogs at its closest position (flow-vs-distance) and, in clog-location, most "
-                 "located clogs at each shape's closest position lean on the obstruction (a sphere of the front the "
-                 "gap sees touches it: the arch stands between obstruction and walls), while the control (no "
-                 "obstruction, W/d 2.5) puts at least 90 % of its clogs at the gap; partly held if the shapes clog but "
-                 "where was not measured or most clogs formed elsewhere; not testable if the control fails")
+LOCATION_RULE = ("held if every shape clogs at its closest position (flow-vs-distance) and, in clog-location, more "
+                 "than half of the located clogs at each shape's closest position lean on the obstruction (a chain of "
+                 "touching spheres the gap sees links it to a wall, none links the two walls without it), while both "
+                 "controls at W/d 2.5 hold: without obstruction at least 90 % of the clogs at the gap, with the "
+                 "cylinder 150 mm up at most 10 % on it; not held if no shape clogs at its closest position; partly "
+                 "held if some shape does not, or where the clogs formed was not measured, or most formed elsewhere; "
+                 "not testable if a control has no located clog or fails")
+
+CONTROLS = {"narrow-gap": "control without obstruction (W/d 2.5)",
+            "narrow-gap-far-cylinder": "control with the cylinder 150 mm up (W/d 2.5)"}
+
+
+def count(r, key):
+    v = num(r, key)
+    return int(v) if math.isfinite(v) else None
 
 
 def located_text(r):
-    n = int(num(r, "clog_located_n"))
-    on, gap = int(num(r, "clog_on_obstruction_n")), int(num(r, "clog_at_gap_n"))
-    where = f"{r['series']} D = {fmt(num(r, 'obstruction.distance_mm'))} mm" if r["series"] != "narrow-gap" \
-        else "control (no obstruction, W/d 2.5)"
+    n, on, gap = count(r, "clog_located_n"), count(r, "clog_on_obstruction_n"), count(r, "clog_at_gap_n")
+    where = CONTROLS.get(r["series"]) or f"{r['series']} D = {fmt(num(r, 'obstruction.distance_mm'))} mm"
+    if not n:
+        return f"{where}: no located clog"
+    if on is None or gap is None:
+        return f"{where}: {n} located clogs, their sites not all measured"
     return f"{where}: {on} of {n} clogs on the obstruction, {gap} at the gap, {n - on - gap} upstream"
+
+
+def controls_hold(rows):
+    """Both controls located clogs and put them where they must be: None if not, else the failing text."""
+    plain = [r for r in rows if r["series"] == "narrow-gap"]
+    far = [r for r in rows if r["series"] == "narrow-gap-far-cylinder"]
+    if not plain or not far or not all(count(r, "clog_located_n") for r in plain + far):
+        return "a control has no located clog"
+    for r in plain:
+        if not (count(r, "clog_at_gap_n") or 0) >= 0.9 * count(r, "clog_located_n"):
+            return "the control without obstruction puts fewer than 90 % of its clogs at the gap"
+    for r in far:
+        on = count(r, "clog_on_obstruction_n")
+        if on is None or not on <= 0.1 * count(r, "clog_located_n"):
+            return "the control with the far cylinder puts more than 10 % of its clogs on it"
+    return None
 
 
 def clog_location_claim(t, model, closest, loc):
@@ -133,32 +161,33 @@ def clog_location_claim(t, model, closest, loc):
                          f"{int(num(r, 'clog_n'))} clogs, emptied in {int(num(r, 'J_paper_n'))} of "
                          f"{int(num(r, 'n_runs'))}" for r in closest)
     claim = "clogging appears between obstruction and walls (IV, Fig. 2b)"
-    # A report written before obstruction contact was measured has no clog_on_obstruction_n: not located.
-    rows = [r for r in loc or [] if r["model"] == model and num(r, "clog_located_n") > 0
-            and math.isfinite(num(r, "clog_on_obstruction_n"))]
-    control = [r for r in rows if r["series"] == "narrow-gap"]
-    shapes = {}
-    for r in rows:
-        if r["series"] != "narrow-gap":
-            shapes.setdefault(r["series"], []).append(r)
     if not clogged:
         t.add(claim, model, evidence, "not held", LOCATION_RULE)
         return
-    if not control or not shapes:
+    # A report written before obstruction contact was measured has no (or a blank) clog_on_obstruction_n.
+    rows = [r for r in loc or [] if r["model"] == model]
+    if not rows or not any(count(r, "clog_on_obstruction_n") is not None for r in rows):
         t.add(claim, model, evidence + "; where the clogs formed: not measured (results/clog-location missing "
               "or written before obstruction contact was measured)", "partly held", LOCATION_RULE)
         return
-    evidence += "; where (clog-location): " + "; ".join(located_text(r) for r in control + sum(shapes.values(), []))
-    c = control[0]
-    if num(c, "clog_at_gap_n") < 0.9 * num(c, "clog_located_n"):
-        t.add(claim, model, evidence, "not testable", LOCATION_RULE)
+    controls = [r for r in rows if r["series"] in CONTROLS]
+    shapes = {}
+    for r in rows:
+        if r["series"] not in CONTROLS:
+            shapes.setdefault(r["series"], []).append(r)
+    nearest = {name: min(rs, key=lambda r: num(r, "obstruction.distance_mm")) for name, rs in shapes.items()}
+    evidence += "; where (clog-location): " + "; ".join(located_text(r) for r in controls + sum(shapes.values(), []))
+    failing = controls_hold(controls)
+    if failing:
+        t.add(claim, model, evidence + f"; {failing}", "not testable", LOCATION_RULE)
         return
 
-    def on_obstruction_share(r):
-        return num(r, "clog_on_obstruction_n") / num(r, "clog_located_n")
-    nearest = [min(rs, key=lambda r: num(r, "obstruction.distance_mm")) for rs in shapes.values()]
-    leaning = all(on_obstruction_share(r) > 0.5 for r in nearest)
-    held = leaning and len(clogged) == len(closest) and len(nearest) == len(closest)
+    def leans(r):
+        n, on = count(r, "clog_located_n"), count(r, "clog_on_obstruction_n")
+        return bool(n) and on is not None and on > 0.5 * n
+    every_shape = {r["series"] for r in closest}
+    held = (len(clogged) == len(closest) and every_shape <= set(nearest)
+            and all(leans(nearest[name]) for name in every_shape))
     t.add(claim, model, evidence, "held" if held else "partly held", LOCATION_RULE)
 
 

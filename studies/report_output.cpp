@@ -99,11 +99,11 @@ std::string render_report_markdown(const MarkdownInput& in) {
       "intervals; J* = J sqrt(d/g), g = 9.81 m/s^2; <s>: mean avalanche size "
       "(censoring-aware); clogs: how many (no crossing for run.clog_timeout_s), and "
       "where they formed when that was measured (at detection, from the front: the "
-      "spheres with a free line of sight to the gap centre): on the obstruction (a "
-      "front sphere touches it: the arch leans on the obstruction, i.e. the flow "
-      "stopped between obstruction and walls), else at the gap (a sphere within "
-      "W/2 + d of the gap centre: an arch across the gap), else upstream (the gap's "
-      "mouth had run empty); "
+      "spheres with a free line of sight to the gap line): on the obstruction (a "
+      "chain of touching front spheres links it to a wall and none links the two "
+      "walls without it: the flow stopped between obstruction and walls), else at "
+      "the gap (a sphere within W/2 + d of the gap centre: an arch across the gap), "
+      "else upstream (the gap's mouth had run empty); "
       "n/a: undefined (e.g. J_paper when no run emptied the "
       "board). Every statistic (decomposition included) is in points.csv.\n\n";
   for (const TextTable& t : in.tables) out += render_markdown(t) + "\n";

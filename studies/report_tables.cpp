@@ -25,8 +25,11 @@ std::string fmt_interval(const Interval& i, int digits) { return fmt_ci(i.lo, i.
 
 std::string fmt_clogs(const ClogStatistics& c) {
   if (c.n_located == 0) return fmt::format("{}", c.n);
-  std::string out = fmt::format("{}: {} at gap, {} on obstruction, {} upstream", c.n, c.n_at_gap,
-                                c.n_on_obstruction, c.n_upstream);
+  std::string out = c.n_contact_not_measured > 0
+                        ? fmt::format("{}: {} at gap, {} upstream ({} by front distance only)", c.n, c.n_at_gap,
+                                      c.n_upstream, c.n_contact_not_measured)
+                        : fmt::format("{}: {} at gap, {} on obstruction, {} upstream", c.n, c.n_at_gap,
+                                      c.n_on_obstruction, c.n_upstream);
   if (c.n_located < c.n) out += fmt::format(", {} not located", c.n - c.n_located);
   return out;
 }
@@ -251,7 +254,9 @@ void avalanche_and_clog_columns(CsvRow& row, const PointStatistics& s) {
   row.num("clog_hill_alpha", s.clogs.tail.valid() ? s.clogs.tail.alpha : kNaN);
   row.count("clog_located_n", s.clogs.n_located);
   row.count("clog_at_gap_n", s.clogs.n_at_gap);
-  row.count("clog_on_obstruction_n", s.clogs.n_on_obstruction);
+  // Unknown (blank) when some clog was located by its front distance alone.
+  row.num("clog_on_obstruction_n",
+          s.clogs.n_contact_not_measured > 0 ? kNaN : static_cast<double>(s.clogs.n_on_obstruction));
   row.count("clog_upstream_n", s.clogs.n_upstream);
   row.num("clog_median_front_d", s.clogs.median_front_d);
 }

@@ -118,6 +118,28 @@ TEST(Avalanches, ExcludeTheFirstAndUseTheCensoringAwareMean) {
   EXPECT_EQ(a.tail.law, "geometric");
 }
 
+// Where the clogs formed (clog_site): one of each site, one located by its front distance
+// alone (a record made before obstruction contact was measured), one not located at all.
+TEST(Clogs, CountsEachSiteAndWhatWasLocatedByDistanceOnly) {
+  RunRecord r;
+  r.diameter_m = 0.00775;
+  r.gap_m = 0.033;
+  const double d = r.diameter_m;
+  r.clogs = {{0, 2, false, 0.5 * d, true},   // leans on the obstruction
+             {3, 2, false, 0.5 * d, false},  // across the gap
+             {6, 2, false, 10 * d, false},   // mouth empty, no lean
+             {9, 2, false, 10 * d},          // front only: upstream by distance
+             {12, 2, true}};                 // not located
+  const ClogStatistics c = clog_statistics({r});
+  EXPECT_EQ(c.n, 5u);
+  EXPECT_EQ(c.n_located, 4u);
+  EXPECT_EQ(c.n_on_obstruction, 1u);
+  EXPECT_EQ(c.n_at_gap, 1u);
+  EXPECT_EQ(c.n_upstream, 2u);
+  EXPECT_EQ(c.n_contact_not_measured, 1u);
+  EXPECT_NEAR(c.median_front_d, (0.5 + 10) / 2, 1e-12);
+}
+
 TEST(Clogs, MeanMedianCensoringAndTail) {
   std::vector<RunRecord> runs(2);
   RandomStream rs(43);

@@ -7,23 +7,29 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 using namespace gapflow;
 using gapflow::testing::compile_file;
 
 namespace {
 
+const ShakeOffsets kAtRest{};
+
 // The A of the paper's scenario at D = 5 mm (to its centroid): its flat base lies
-// 0.67 mm above the gap line, right over the gap centre. No shaking, so the contact
-// tolerance is 0.1 d.
+// 0.67 mm above the gap line, right over the gap centre. Nothing shaken.
 CompiledScenario close_a() {
   return compile_file("scenarios/paper/a_obstruction.toml",
                       {"obstruction.distance_mm=5", "particles.count=4", "particles.size_scatter=0",
                        "shaking.walls.enabled=false", "shaking.obstruction.enabled=false"});
 }
 
-// A disc of radius r resting `gap` (m) off the A's right flank, `along` (m) up the flank
-// from its lower right corner.
-Vec2 beside_right_flank(const CompiledScenario& sc, double r, double along, double gap) {
+double tolerance(const CompiledScenario& sc) { return kContactTolerance_d * sc.nominal_diameter; }
+
+// A two-disc arch in the A's right passage: disc 0 rests on the A's right flank, 2 mm up
+// from its lower right corner; disc 1 touches disc 0 and the right bottleneck wall.
+std::vector<BoardDisc> arch_beside_right_flank(const CompiledScenario& sc) {
+  const double r = sc.nominal_diameter / 2;
   const std::vector<Vec2>& v = sc.obstruction.polygon.vertices;
   Vec2 corner = v[0], apex = v[0];
   for (Vec2 p : v) {
@@ -31,9 +37,17 @@ Vec2 beside_right_flank(const CompiledScenario& sc, double r, double along, doub
     if (p.y > apex.y) apex = p;
   }
   const Vec2 up = (1 / length(apex - corner)) * (apex - corner);
-  const Vec2 out{-up.y, up.x};  // the flank's outward normal points right and up: rotate `up` clockwise
-  const Vec2 normal = out.x > 0 ? out : Vec2{up.y, -up.x};
-  return corner + along * up + (r + gap) * normal;
+  const Vec2 outward{-up.y, up.x};  // perpendicular to the flank, pointing away from the A (+x)
+  const Vec2 on_flank = corner + 0.002 * up + (r + 1e-6) * (outward.x > 0 ? outward : -1 * outward);
+  // Disc 1 at 2r from disc 0, turned up by the angle at which it just touches the wall (bisection:
+  // turning up moves it away from the wall, which leans outward).
+  auto next_to = [&](double angle) { return on_flank + 2 * r * Vec2{std::cos(angle), std::sin(angle)}; };
+  double lo = -1.0, hi = 1.4;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = (lo + hi) / 2;
+    (clearance_to_bottleneck_walls(sc, next_to(mid)) < r ? lo : hi) = mid;
+  }
+  return {{0, on_flank, r}, {1, next_to(hi), r}};
 }
 
 }  // namespace
@@ -42,59 +56,95 @@ TEST(ClogFront, ADiscBehindAnotherOrBehindTheObstructionIsNotSeen) {
   const CompiledScenario sc = compile_file("scenarios/paper/cylinder.toml",
                                            {"obstruction.distance_mm=70", "particles.count=4"});
   const double r = sc.nominal_diameter / 2;
-  const Vec2 eye{0, 0};
   const Circle& c = sc.obstruction.circle;
   const std::vector<BoardDisc> discs = {
-      {0, {-0.01, 0.01}, r},                         // left of the gap's axis, clear of the other rays
-      {1, {-0.02, 0.02}, r},                         // right behind disc 0, on the same ray
-      {2, {c.centre.x, c.centre.y + c.radius + 2 * r}, r},  // on top of the cylinder: hidden by it
-      {3, {c.centre.x + c.radius + r, sc.obstruction.nearest_y}, r},  // beside its lowest point: seen past it
+      {0, {-0.01, 0.01}, r},                                           // left of the gap's axis
+      {1, {-0.02, 0.02}, r},                                           // right behind disc 0, on the same ray
+      {2, {c.centre.x, c.centre.y + c.radius + r}, r},                 // resting on top of the cylinder
+      {3, {c.centre.x + c.radius + r, sc.obstruction.nearest_y}, r},  // beside its lowest point
   };
-  EXPECT_EQ(visible_from(sc.obstruction, discs, eye), (std::vector<int>{0, 3}));
-  EXPECT_EQ(visible_from(ObstructionGeometry{}, discs, eye), (std::vector<int>{0, 2, 3}))
+  EXPECT_EQ(visible_from(sc.obstruction, discs, {0, 0}), (std::vector<int>{0, 3}));
+  EXPECT_EQ(visible_from(ObstructionGeometry{}, discs, {0, 0}), (std::vector<int>{0, 2, 3}))
       << "without the obstruction only disc 1 is hidden (by disc 0)";
+  EXPECT_EQ(visible_from_gap(sc, sc.obstruction, discs), (std::vector<int>{0, 1, 3}))
+      << "the gap's left end sees disc 1 past disc 0; no point of the gap line sees past the cylinder to disc 2";
+}
+
+// The scan for occluders stops at |p - eye| + r_max: a disc a little further from the eye
+// than p can still cut the segment near p's end (the bound must include its radius).
+TEST(ClogFront, AnOccluderFurtherFromTheEyeThanTheDiscItHidesIsFound) {
+  const double r = 0.004;
+  const std::vector<BoardDisc> discs = {{0, {0.0, 0.05}, r}, {1, {0.9 * r, 0.05 + 0.1 * r}, r}};
+  ASSERT_GT(length(discs[1].centre), length(discs[0].centre));
+  // Each hides the other; a bound without r_max would miss disc 1 as disc 0's occluder.
+  EXPECT_TRUE(visible_from(ObstructionGeometry{}, discs, {0, 0}).empty());
 }
 
 TEST(ClogFront, AnArchBesideACloseObstructionFacesTheGapsEndNotItsCentre) {
   const CompiledScenario sc = close_a();
   ASSERT_LT(sc.obstruction.nearest_y, 0.001) << "the A's base must hang over the gap centre";
-  const double r = sc.nominal_diameter / 2;
-  const BoardDisc on_flank{7, beside_right_flank(sc, r, 0.002, 0.0001 * r), r};
-  const std::vector<BoardDisc> discs = {on_flank};
-  EXPECT_TRUE(visible_from(sc.obstruction, discs, {0, 0}).empty()) << "the A hides the flank from the gap centre";
-  EXPECT_EQ(visible_from_gap(sc, discs), std::vector<int>{7}) << "the gap's right part sees it";
-  EXPECT_TRUE(touches_obstruction(sc.obstruction, on_flank, obstruction_contact_tolerance(sc)));
-  const BoardDisc off_flank{8, beside_right_flank(sc, r, 0.002, 0.2 * sc.nominal_diameter), r};
-  EXPECT_FALSE(touches_obstruction(sc.obstruction, off_flank, obstruction_contact_tolerance(sc)))
-      << "0.2 d off is beyond the 0.1 d tolerance";
+  const std::vector<BoardDisc> arch = arch_beside_right_flank(sc);
+  ASSERT_LE(clearance_to_bottleneck_walls(sc, arch[1].centre) - arch[1].radius, 1e-9) << "disc 1 on the wall";
+  EXPECT_TRUE(visible_from(sc.obstruction, {arch[0]}, {0, 0}).empty()) << "the A hides the flank from the gap centre";
+  EXPECT_EQ(visible_from_gap(sc, sc.obstruction, {arch[0]}), std::vector<int>{0}) << "the gap's right part sees it";
+  EXPECT_TRUE(touches_obstruction(sc.obstruction, arch[0], tolerance(sc)));
+  EXPECT_FALSE(touches_obstruction(sc.obstruction, arch[1], tolerance(sc)));
+  EXPECT_TRUE(front_leans_on_obstruction(sc, arch, kAtRest)) << "obstruction - disc 0 - disc 1 - wall";
+  EXPECT_FALSE(front_leans_on_obstruction(sc, {arch[0]}, kAtRest)) << "no chain to a wall";
 }
 
-TEST(ClogFront, ShakingTheObstructionWidensTheContactToleranceByItsAmplitude) {
-  const CompiledScenario still = close_a();
-  const CompiledScenario shaken = compile_file(
+// An arch across a narrow gap (three discs, wall to wall) whose middle disc touches the base
+// of an A just above it: the arch rests on the obstruction but stands from wall to wall, so it
+// is an arch across the gap. Without the right disc, the chain runs wall - disc - disc - A.
+TEST(ClogFront, AnArchFromWallToWallIsAcrossTheGapEvenIfItTouchesTheObstruction) {
+  const CompiledScenario probe = compile_file("scenarios/paper/a_obstruction.toml",
+                                              {"bottleneck.gap_mm=19.4", "particles.count=4", "particles.size_scatter=0"});
+  const double d = probe.nominal_diameter, r = d / 2;
+  const double centroid_above_base = probe.obstruction.centroid.y - probe.obstruction.nearest_y;
+  const CompiledScenario sc = compile_file(
       "scenarios/paper/a_obstruction.toml",
-      {"obstruction.distance_mm=5", "shaking.obstruction.enabled=true", "shaking.obstruction.amplitude_mm=1"});
-  EXPECT_NEAR(obstruction_contact_tolerance(still), 0.1 * still.nominal_diameter, 1e-15);
-  EXPECT_NEAR(obstruction_contact_tolerance(shaken), 0.1 * shaken.nominal_diameter + 0.001, 1e-15);
+      {"bottleneck.gap_mm=19.4", "particles.count=4", "particles.size_scatter=0", "shaking.walls.enabled=false",
+       "shaking.obstruction.enabled=false",
+       "obstruction.distance_mm=" + std::to_string((1.05 * d + centroid_above_base) * 1e3)});
+  ASSERT_NEAR(sc.obstruction.nearest_y, 1.05 * d, 1e-6);
+  const std::vector<BoardDisc> arch = {{0, {-d, r}, r}, {1, {0.0, r}, r}, {2, {d, r}, r}};
+  for (const BoardDisc& side : {arch[0], arch[2]})
+    ASSERT_LE(clearance_to_bottleneck_walls(sc, side.centre) - r, tolerance(sc)) << "the side discs touch the walls";
+  ASSERT_TRUE(touches_obstruction(sc.obstruction, arch[1], tolerance(sc)));
+  EXPECT_FALSE(front_leans_on_obstruction(sc, arch, kAtRest));
+  EXPECT_TRUE(front_leans_on_obstruction(sc, {arch[0], arch[1]}, kAtRest));
 }
 
-// The gap monitor at the step that makes a quiet period a clog: particle 0 leans on the A's
-// right flank within W/2 + d of the gap centre, so the front distance alone would call the
-// clog "at the gap"; the front touches the obstruction, so it is located there.
+TEST(ClogFront, TheObstructionIsWhereTheShakingHasIt) {
+  const CompiledScenario sc = close_a();
+  const std::vector<BoardDisc> arch = arch_beside_right_flank(sc);
+  const double d = sc.nominal_diameter;
+  const Vec2 away{0.3 * d, 0};  // the A 0.3 d to the right of disc 0's side: still overlapping, still touching
+  const Vec2 back{-0.3 * d, 0};
+  EXPECT_TRUE(touches_obstruction(displaced(sc.obstruction, away), arch[0], tolerance(sc)));
+  EXPECT_FALSE(touches_obstruction(displaced(sc.obstruction, back), arch[0], tolerance(sc)))
+      << "0.3 d off along x is more than 0.1 d off the flank";
+  ShakeOffsets shaken{};
+  shaken.obstruction = back;
+  EXPECT_FALSE(front_leans_on_obstruction(sc, arch, shaken));
+}
+
+// The gap monitor at the step that makes a quiet period a clog: the arch beside the A's right
+// flank lies within W/2 + d of the gap centre, so the front distance alone would call the clog
+// "at the gap"; the arch leans on the obstruction, so it is located there.
 TEST(ClogFront, TheMonitorLocatesAnArchOnTheObstructionThereAndAnArchAcrossTheGapAtTheGap) {
   const CompiledScenario sc = close_a();
-  const double r = sc.nominal_diameter / 2, d = sc.nominal_diameter;
+  const double d = sc.nominal_diameter;
+  const std::vector<BoardDisc> arch = arch_beside_right_flank(sc);
   GapMonitor m(sc);
   double t = 0;
-  auto hold = [&](const std::vector<Vec2>& at, double until) {
-    for (; t < until - 1e-9;) {
-      t += 0.1;
-      for (size_t i = 0; i < at.size(); ++i) m.observe(static_cast<int>(i), at[i], t);
-      m.end_step(t);
-    }
-  };
-  const Vec2 on_flank = beside_right_flank(sc, r, 0.002, 0.0001 * r);
-  hold({on_flank, {0.0, 30 * d}, {0.1, 30 * d}, {-0.1, 30 * d}}, 1.5);
+  for (; t < 1.5 - 1e-9;) {
+    t += 0.1;
+    m.observe(0, arch[0].centre, t);
+    m.observe(1, arch[1].centre, t);
+    for (int i = 2; i < 4; ++i) m.observe(i, {0.02 * (i - 2.5), 30 * d}, t);
+    m.end_step(t);
+  }
   RunRecord rec;
   m.finish(t, EndReason::time_limit, rec);
   ASSERT_EQ(rec.clogs.size(), 1u);
@@ -104,7 +154,7 @@ TEST(ClogFront, TheMonitorLocatesAnArchOnTheObstructionThereAndAnArchAcrossTheGa
   EXPECT_TRUE(*c.on_obstruction);
   EXPECT_EQ(clog_site(c, sc.gap, d), ClogSite::obstruction);
 
-  // The same board without an obstruction: the arch is across the gap.
+  // A board without an obstruction: the arch is across the gap.
   const CompiledScenario open = compile_file("scenarios/paper/no_obstruction_medium.toml",
                                              {"particles.count=4", "particles.size_scatter=0"});
   GapMonitor m2(open);
@@ -112,7 +162,7 @@ TEST(ClogFront, TheMonitorLocatesAnArchOnTheObstructionThereAndAnArchAcrossTheGa
   for (; t < 1.5 - 1e-9;) {
     t += 0.1;
     m2.observe(0, {0.0, 0.6 * d}, t);
-    for (int i = 1; i < 4; ++i) m2.observe(i, {0.02 * i, 30 * d}, t);
+    for (int i = 1; i < 4; ++i) m2.observe(i, {0.02 * (i - 2), 30 * d}, t);
     m2.end_step(t);
   }
   RunRecord rec2;

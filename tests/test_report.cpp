@@ -315,10 +315,11 @@ TEST(PaperClaims, APeakIsHeldOnlyIfItsReTestReproducesIt) {
 }
 
 // studies/paper_claims.py: "clogging appears between obstruction and walls" is held only
-// where most clogs at the closest position lean on the obstruction (clog-location) and the
-// control, a narrow gap without obstruction, puts its clogs at the gap (else the locator is
-// not trusted). A report written before obstruction contact was measured locates nothing.
-TEST(PaperClaims, ClogsBetweenObstructionAndWallsNeedTheirLocationAndAWorkingControl) {
+// where most clogs at the closest position lean on the obstruction (clog-location) and both
+// controls at a narrow gap hold: without obstruction the clogs are at the gap, with a far
+// cylinder none leans on it (else the locator is not trusted). A report written before
+// obstruction contact was measured locates nothing.
+TEST(PaperClaims, ClogsBetweenObstructionAndWallsNeedTheirLocationAndWorkingControls) {
   const auto python = find_python_with_matplotlib();
   if (!python) GTEST_SKIP() << "no python3 with matplotlib found";
   TempDir dir;
@@ -328,19 +329,21 @@ TEST(PaperClaims, ClogsBetweenObstructionAndWallsNeedTheirLocationAndAWorkingCon
              "none,2d,4,4,91,0,,0,7.75,\n"
              "cylinder,2d,4,0,,30,70,9.03,7.75,insufficient data\n");
   int call = 0;
-  // control_at_gap / cylinder_on_obstruction: counts of 10 located clogs; "" = no clog-location study.
-  auto verdict_with = [&](const std::string& control_at_gap, const std::string& cylinder_on_obstruction,
-                          bool with_contact_column = true) {
-    if (!control_at_gap.empty()) {
+  // Clogs (of 10 located at each point): the plain control's at the gap, the far-cylinder control's
+  // and the close cylinder's on the obstruction; "" leaves the column blank; no clog-location study
+  // when plain_at_gap is "-".
+  auto verdict_with = [&](const std::string& plain_at_gap, const std::string& far_on, const std::string& close_on) {
+    fs::remove_all(dir / "clog-location");
+    if (plain_at_gap != "-") {
+      const std::string zero = close_on.empty() ? "" : "0";  // a report without contact leaves every cell blank
       fs::create_directories(dir / "clog-location");
-      const std::string contact_header = with_contact_column ? ",clog_on_obstruction_n" : "";
-      const std::string control_on = with_contact_column ? ",0" : "";
-      const std::string cylinder_on = with_contact_column ? "," + cylinder_on_obstruction : "";
       write_text(dir / "clog-location" / "points.csv",
-                 "series,model,n_runs,clog_n,clog_located_n,clog_at_gap_n,obstruction.distance_mm" + contact_header +
-                     "\n"
-                     "narrow-gap,2d,4,10,10," + control_at_gap + "," + control_on + "\n"
-                     "cylinder,2d,4,10,10,0,70" + cylinder_on + "\n");
+                 "series,model,n_runs,clog_n,clog_located_n,clog_at_gap_n,clog_on_obstruction_n,"
+                 "obstruction.distance_mm\n"
+                 "narrow-gap,2d,4,10,10," + plain_at_gap + "," + zero + ",\n"
+                 "narrow-gap-far-cylinder,2d,4,10,10,10," + far_on + ",150\n"
+                 "cylinder,2d,4,10,10,0," + close_on + ",70\n"
+                 "cylinder,2d,4,0,0,0," + zero + ",90\n");
     }
     const fs::path out = dir / fmt::format("claims_{}.md", ++call);
     const int rc = run_program({*python, (fs::path(GAPFLOW_SOURCE_DIR) / "studies" / "paper_claims.py").string(),
@@ -354,11 +357,13 @@ TEST(PaperClaims, ClogsBetweenObstructionAndWallsNeedTheirLocationAndAWorkingCon
     const auto v = row.find("**");
     return row.substr(v + 2, row.find("**", v + 2) - v - 2);
   };
-  EXPECT_EQ(verdict_with("", ""), "partly held") << "location not measured";
-  EXPECT_EQ(verdict_with("10", "9"), "held") << "9 of 10 on the obstruction, control at the gap";
-  EXPECT_EQ(verdict_with("10", "2"), "partly held") << "most clogs elsewhere";
-  EXPECT_EQ(verdict_with("5", "9"), "not testable") << "the control does not clog at the gap";
-  EXPECT_EQ(verdict_with("10", "9", false), "partly held") << "written before obstruction contact was measured";
+  EXPECT_EQ(verdict_with("-", "", ""), "partly held") << "location not measured";
+  EXPECT_EQ(verdict_with("10", "0", "9"), "held") << "9 of 10 on the obstruction, controls hold";
+  EXPECT_EQ(verdict_with("10", "0", "2"), "partly held") << "most clogs elsewhere";
+  EXPECT_EQ(verdict_with("5", "0", "9"), "not testable") << "the plain control does not clog at the gap";
+  EXPECT_EQ(verdict_with("", "0", "9"), "not testable") << "the plain control's sites are unknown";
+  EXPECT_EQ(verdict_with("10", "3", "9"), "not testable") << "the far cylinder takes clogs it cannot cause";
+  EXPECT_EQ(verdict_with("10", "", ""), "partly held") << "written before obstruction contact was measured";
 }
 
 TEST_F(ReportTiny, EveryAnalysisKindRunsOnRealDataWithoutCrashing) {

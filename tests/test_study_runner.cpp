@@ -189,7 +189,9 @@ RunRecord sample_record() {
   r.j_mid = 0.1 + 0.2;
   r.crossings = {{3, 0.5, -0.001}, {0, 0.75, 0.002}, {4, 2.5, 0.0}, {1, 2.6, 1e-17}, {3, 2.7, 0.001}};  // 3 re-injected
   r.avalanches = {{2, 0.5, 0.75, true, false}, {2, 2.5, 2.6, false, true}};
-  r.clogs = {{0.75, 1.75, false, 0.0171234567890123, true}, {2.6, 9.745678901234567, true}};  // one front measured
+  // Located on the obstruction, located elsewhere (false must not read back as NULL), not located.
+  r.clogs = {{0.75, 1.75, false, 0.0171234567890123, true}, {1.9, 1.25, false, 0.005, false},
+             {2.6, 9.745678901234567, true}};
   return r;
 }
 
@@ -574,7 +576,7 @@ void expect_older_store_reads_back(const std::vector<std::string>& dropped_colum
   Store store(dir / "runs.sqlite");
   std::vector<StoredRun> runs = store.load("s");
   ASSERT_EQ(runs.size(), 1u);
-  ASSERT_EQ(runs[0].record.clogs.size(), 2u);
+  ASSERT_EQ(runs[0].record.clogs.size(), 3u);
   EXPECT_EQ(runs[0].record.clogs[0].front_m.has_value(), front_kept);
   EXPECT_FALSE(runs[0].record.clogs[0].on_obstruction) << "not measured then";
   JobIdentity new_id = sample_identity();
