@@ -214,6 +214,15 @@ double median(std::vector<double> v) {
   return sorted_quantile(v, 0.5);
 }
 
+Interval wilson_interval(std::size_t successes, std::size_t n, double alpha) {
+  if (n == 0) return {};
+  const double z = normal_quantile(1 - alpha / 2), nn = static_cast<double>(n);
+  const double p = static_cast<double>(successes) / nn, z2n = z * z / nn;
+  const double centre = (p + z2n / 2) / (1 + z2n);
+  const double half = z * std::sqrt(p * (1 - p) / nn + z2n / (4 * nn)) / (1 + z2n);
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
 Interval bootstrap_mean_interval(const std::vector<double>& v, const BootstrapOptions& opt) {
   if (v.size() < 2 || opt.resamples < 2) return {};
   RandomStream rs(opt.seed);

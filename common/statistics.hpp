@@ -91,6 +91,11 @@ double median(std::vector<double> values);           // NaN when empty
 // Type-7 (linear interpolation) quantile of a SORTED sample, q in [0, 1].
 double sorted_quantile(const std::vector<double>& sorted, double q);
 
+// Wilson score interval of a binomial proportion k/n (Wilson 1927) at the two-sided
+// confidence 1 - alpha: stays inside [0, 1] and keeps its width at k = 0 or n, where
+// the normal (Wald) interval collapses to a point. Invalid (NaN) for n = 0.
+Interval wilson_interval(std::size_t successes, std::size_t n, double alpha = 0.05);
+
 // Percentile bootstrap interval of the mean: B resamples of size n with
 // replacement; [q_{a/2}, q_{1-a/2}] of the resampled means (Efron & Tibshirani 1993, ch. 13),
 // with a expanded as described at BootstrapOptions::expanded (default). Invalid (NaN) for n < 2.

@@ -195,25 +195,45 @@ PlotFigure clogging_figure(const ReportData& data) {
   return f;
 }
 
-void add_discharge_figures(const ReportData& data, std::vector<PlotFigure>& figures) {
-  const std::size_t first = figures.size();
+// Share of the located clogs whose arch leans on the obstruction (clog_site), with its
+// Wilson 95 % interval; points whose clogs were located by front distance alone are left out.
+PlotLine clogs_on_obstruction_line(const ReportData& data, const std::string& series, const std::string& model,
+                                   const XAxis& x) {
+  PlotLine l = series_line(series, model);
+  for (const ReportPoint* p : points_along(data, series, model, x)) {
+    const ClogStatistics& c = p->stats.clogs;
+    if (c.n_located == 0 || c.n_contact_not_measured > 0 || !std::isfinite(x_value(*p, x))) continue;
+    const Interval w = wilson_interval(c.n_on_obstruction, c.n_located);
+    l.x.push_back(x_value(*p, x));
+    l.y.push_back(static_cast<double>(c.n_on_obstruction) / static_cast<double>(c.n_located));
+    l.ylo.push_back(w.lo);
+    l.yhi.push_back(w.hi);
+  }
+  return l;
+}
+
+bool some_clog_on_obstruction(const ReportData& data) {
+  return std::any_of(data.points.begin(), data.points.end(),
+                     [](const ReportPoint& p) { return p.stats.clogs.n_on_obstruction > 0; });
+}
+
+// One figure per swept axis (made by make_figure(x) when first needed), each series and model
+// with a swept axis adding line_of(series, model, x) to its axis' figure.
+template <class MakeFigure, class LineOf>
+void add_figures_per_axis(const ReportData& data, std::vector<PlotFigure>& figures, MakeFigure&& make_figure,
+                          LineOf&& line_of) {
+  const auto first = static_cast<std::ptrdiff_t>(figures.size());
   for (const auto& [series, model] : series_models(data)) {
     const XAxis x = x_axis_of(data, series);
-    if (!x.valid()) continue;
-    const std::string file = discharge_figure_file(x.name);
-    auto it = std::find_if(figures.begin() + static_cast<std::ptrdiff_t>(first), figures.end(),
-                           [&](const PlotFigure& f) { return f.file == file; });
+    if (!x.valid()) continue;  // a single point without a swept value: in the tables only
+    PlotFigure fresh = make_figure(x);
+    auto it = std::find_if(figures.begin() + first, figures.end(),
+                           [&](const PlotFigure& f) { return f.file == fresh.file; });
     if (it == figures.end()) {
-      figures.push_back({file,
-                         fmt::format("Share of the spheres through the gap when the run ended, against {}", x.name),
-                         x.name,
-                         "passed / N  (mean; bars: lowest and highest run)",
-                         {},
-                         {},
-                         false});
+      figures.push_back(std::move(fresh));
       it = figures.end() - 1;
     }
-    PlotLine l = discharge_line(data, series, model, x);
+    PlotLine l = line_of(series, model, x);
     if (!l.x.empty()) it->lines.push_back(std::move(l));
   }
 }
@@ -223,27 +243,51 @@ void add_discharge_figures(const ReportData& data, std::vector<PlotFigure>& figu
 std::vector<PlotFigure> generic_figures(const ReportData& data, JKind j) {
   std::vector<PlotFigure> figures;
   const std::vector<PlotBand> bands = baseline_bands(data, j);
-  for (const auto& [series, model] : series_models(data)) {
-    const XAxis x = x_axis_of(data, series);
-    if (!x.valid())
-      continue;  // a single point without a swept value: in the tables (and the
-                 // band) only
-    const std::string file = j_star_figure_file(x.name);
-    auto it = std::find_if(figures.begin(), figures.end(), [&](const PlotFigure& f) { return f.file == file; });
-    if (it == figures.end()) {
-      figures.push_back({file,
-                         fmt::format("{}* = J sqrt(d/g) against {}", to_string(j), x.name),
-                         x.name,
-                         fmt::format("{}*  (mean, 95% CI)", to_string(j)),
-                         {},
-                         bands,
-                         false});
-      it = figures.end() - 1;
-    }
-    PlotLine l = j_star_line(data, series, model, x, j);
-    if (!l.x.empty()) it->lines.push_back(std::move(l));
-  }
-  if (some_board_not_emptied(data)) add_discharge_figures(data, figures);
+  add_figures_per_axis(
+      data, figures,
+      [&](const XAxis& x) {
+        return PlotFigure{j_star_figure_file(x.name),
+                          fmt::format("{}* = J sqrt(d/g) against {}", to_string(j), x.name),
+                          x.name,
+                          fmt::format("{}*  (mean, 95% CI)", to_string(j)),
+                          {},
+                          bands,
+                          false};
+      },
+      [&](const std::string& series, const std::string& model, const XAxis& x) {
+        return j_star_line(data, series, model, x, j);
+      });
+  if (some_board_not_emptied(data))
+    add_figures_per_axis(
+        data, figures,
+        [](const XAxis& x) {
+          return PlotFigure{discharge_figure_file(x.name),
+                            fmt::format("Share of the spheres through the gap when the run ended, against {}", x.name),
+                            x.name,
+                            "passed / N  (mean; bars: lowest and highest run)",
+                            {},
+                            {},
+                            false};
+        },
+        [&](const std::string& series, const std::string& model, const XAxis& x) {
+          return discharge_line(data, series, model, x);
+        });
+  if (some_clog_on_obstruction(data))
+    add_figures_per_axis(
+        data, figures,
+        [](const XAxis& x) {
+          return PlotFigure{"clogs_on_obstruction_vs_" + x_file_part(x.name) + ".png",
+                            fmt::format("Share of the located clogs whose arch leans on the obstruction, against {}",
+                                        x.name),
+                            x.name,
+                            "on the obstruction / located  (95% Wilson)",
+                            {},
+                            {},
+                            false};
+        },
+        [&](const std::string& series, const std::string& model, const XAxis& x) {
+          return clogs_on_obstruction_line(data, series, model, x);
+        });
   if (has_avalanche_data(data)) figures.push_back(clogging_figure(data));
   return figures;
 }

@@ -434,3 +434,18 @@ TEST(Beverloo, ReportsAPoorModelAndTooFewPoints) {
   const BeverlooFit none = fit_beverloo({pts[0], pts[1]});
   EXPECT_FALSE(none.ok);
 }
+
+// Wilson (1927) score interval, 95 %: values computed by hand from the formula
+// (p + z^2/2n +- z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n), z = 1.959964.
+TEST(Wilson, MatchesHandComputedIntervalsAndStaysInsideZeroOne) {
+  const Interval nine_of_ten = wilson_interval(9, 10);
+  EXPECT_NEAR(nine_of_ten.lo, 0.59585, 1e-4);
+  EXPECT_NEAR(nine_of_ten.hi, 0.98212, 1e-4);
+  const Interval none_of_ten = wilson_interval(0, 10);
+  EXPECT_NEAR(none_of_ten.lo, 0.0, 1e-12);
+  EXPECT_NEAR(none_of_ten.hi, 0.27753, 1e-4) << "the Wald interval would be [0, 0]";
+  const Interval all = wilson_interval(13, 13);
+  EXPECT_NEAR(all.hi, 1.0, 1e-12);
+  EXPECT_LT(all.lo, 1.0);
+  EXPECT_FALSE(wilson_interval(0, 0).valid());
+}
