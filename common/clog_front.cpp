@@ -97,7 +97,7 @@ double distance_to_side(const CompiledScenario& sc, Vec2 p, double side, Vec2 ti
   return d;
 }
 
-// Indices of the discs reachable from `start` through touching discs.
+// Which discs are reachable from those marked in `start` through touching discs (depth first).
 std::vector<char> reachable(const std::vector<BoardDisc>& discs, const std::vector<char>& start, double tolerance) {
   std::vector<char> reached = start;
   std::vector<size_t> todo;
@@ -126,18 +126,21 @@ bool front_leans_on_obstruction(const CompiledScenario& sc, const std::vector<Bo
   std::vector<BoardDisc> front;
   for (size_t i = 0; i < board.size(); ++i)
     if (seen[i]) front.push_back(board[i]);
-  const double tolerance = kContactTolerance_d * sc.nominal_diameter;
+  const double d = sc.nominal_diameter;
+  const double to_disc = kDiscContactTolerance_d * d, to_boundary = kBoundaryContactTolerance_d * d;
+  const double to_left = to_boundary + length(offsets.left_wall), to_right = to_boundary + length(offsets.right_wall);
+  const double to_obstruction = to_boundary + length(offsets.obstruction);
   std::vector<char> on_left(front.size()), on_right(front.size()), on_obstruction(front.size());
   for (size_t i = 0; i < front.size(); ++i) {
     const BoardDisc& b = front[i];
-    on_left[i] = distance_to_side(sc, b.centre, -1, sc.left_tip, offsets.left_wall) - b.radius <= tolerance;
-    on_right[i] = distance_to_side(sc, b.centre, +1, sc.right_tip, offsets.right_wall) - b.radius <= tolerance;
-    on_obstruction[i] = touches_obstruction(obstruction, b, tolerance);
+    on_left[i] = distance_to_side(sc, b.centre, -1, sc.left_tip, offsets.left_wall) - b.radius <= to_left;
+    on_right[i] = distance_to_side(sc, b.centre, +1, sc.right_tip, offsets.right_wall) - b.radius <= to_right;
+    on_obstruction[i] = touches_obstruction(obstruction, b, to_obstruction);
   }
-  const std::vector<char> from_left = reachable(front, on_left, tolerance);
+  const std::vector<char> from_left = reachable(front, on_left, to_disc);
   for (size_t i = 0; i < front.size(); ++i)
     if (from_left[i] && on_right[i]) return false;  // an arch from wall to wall
-  const std::vector<char> from_obstruction = reachable(front, on_obstruction, tolerance);
+  const std::vector<char> from_obstruction = reachable(front, on_obstruction, to_disc);
   for (size_t i = 0; i < front.size(); ++i)
     if (from_obstruction[i] && (on_left[i] || on_right[i])) return true;
   return false;

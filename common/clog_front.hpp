@@ -24,9 +24,15 @@ struct BoardDisc {
   double radius;  // m
 };
 
-// Two outlines closer than this (in nominal diameters) touch: contacts overlap or
-// part by a little in both engines (Box2D's skin is ~0.01 d).
-constexpr double kContactTolerance_d = 0.1;
+// Two spheres whose outlines are closer than this (in nominal diameters) touch:
+// resting contacts overlap or part by ~0.01 d in both engines (Box2D's speculative
+// margin is 0.02 units = 0.02 d). Tighter than kBoundaryContactTolerance_d, so that
+// two arches that merely come close are not read as one.
+constexpr double kDiscContactTolerance_d = 0.02;
+// A sphere touches a wall or the obstruction within this (in nominal diameters) plus
+// that body's current shaking displacement: a shaken body moves at 20 Hz, faster
+// than the spheres resting on it can follow.
+constexpr double kBoundaryContactTolerance_d = 0.1;
 
 // The ids of `discs` with a free line of sight to `eye` (plane frame, m); every
 // disc in `discs` may hide another, and so does `obstruction`. Ids in the order of `discs`.
@@ -47,8 +53,9 @@ bool touches_obstruction(const ObstructionGeometry& obstruction, const BoardDisc
 
 // Whether the arch of a stopped flow leans on the obstruction, judged from the
 // front (the discs the gap sees, with the walls and obstruction where the shaking
-// schedule has them at that moment). Discs, walls and obstruction within
-// kContactTolerance_d of each other touch. True when a chain of touching front
+// schedule has them at that moment). Discs touch within kDiscContactTolerance_d,
+// walls and obstruction within kBoundaryContactTolerance_d plus their current
+// shaking displacement. True when a chain of touching front
 // discs links the obstruction to a wall (bottleneck or retaining) and no chain
 // links the two walls without it: an arch from wall to wall that merely rests on
 // the obstruction is an arch across the gap, not one between obstruction and walls.

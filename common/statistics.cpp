@@ -2,9 +2,12 @@
 
 #include "common/random.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 namespace gapflow {
 
@@ -216,6 +219,7 @@ double median(std::vector<double> v) {
 
 Interval wilson_interval(std::size_t successes, std::size_t n, double alpha) {
   if (n == 0) return {};
+  if (successes > n) throw std::invalid_argument(fmt::format("wilson_interval: {} successes of {}", successes, n));
   const double z = normal_quantile(1 - alpha / 2), nn = static_cast<double>(n);
   const double p = static_cast<double>(successes) / nn, z2n = z * z / nn;
   const double centre = (p + z2n / 2) / (1 + z2n);

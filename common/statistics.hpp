@@ -93,7 +93,8 @@ double sorted_quantile(const std::vector<double>& sorted, double q);
 
 // Wilson score interval of a binomial proportion k/n (Wilson 1927) at the two-sided
 // confidence 1 - alpha: stays inside [0, 1] and keeps its width at k = 0 or n, where
-// the normal (Wald) interval collapses to a point. Invalid (NaN) for n = 0.
+// the normal (Wald) interval collapses to a point. Invalid (NaN) for n = 0; throws
+// std::invalid_argument for successes > n.
 Interval wilson_interval(std::size_t successes, std::size_t n, double alpha = 0.05);
 
 // Percentile bootstrap interval of the mean: B resamples of size n with

@@ -131,7 +131,9 @@ def count(r, key):
 def located_text(r):
     n, on, gap = count(r, "clog_located_n"), count(r, "clog_on_obstruction_n"), count(r, "clog_at_gap_n")
     where = CONTROLS.get(r["series"]) or f"{r['series']} D = {fmt(num(r, 'obstruction.distance_mm'))} mm"
-    if not n:
+    if n is None:
+        return f"{where}: clogs not located"
+    if n == 0:
         return f"{where}: no located clog"
     if on is None or gap is None:
         return f"{where}: {n} located clogs, their sites not all measured"
@@ -145,11 +147,16 @@ def controls_hold(rows):
     if not plain or not far or not all(count(r, "clog_located_n") for r in plain + far):
         return "a control has no located clog"
     for r in plain:
-        if not (count(r, "clog_at_gap_n") or 0) >= 0.9 * count(r, "clog_located_n"):
+        at_gap = count(r, "clog_at_gap_n")
+        if at_gap is None:
+            return "the sites of the control without obstruction were not measured"
+        if not at_gap >= 0.9 * count(r, "clog_located_n"):
             return "the control without obstruction puts fewer than 90 % of its clogs at the gap"
     for r in far:
         on = count(r, "clog_on_obstruction_n")
-        if on is None or not on <= 0.1 * count(r, "clog_located_n"):
+        if on is None:
+            return "the sites of the control with the far cylinder were not measured"
+        if not on <= 0.1 * count(r, "clog_located_n"):
             return "the control with the far cylinder puts more than 10 % of its clogs on it"
     return None
 
@@ -158,8 +165,8 @@ def clog_location_claim(t, model, closest, loc):
     """Clogging between obstruction and walls: that the shapes clog (flow-vs-distance) and where (clog-location)."""
     clogged = [r for r in closest if num(r, "clog_n") > 0]
     evidence = "; ".join(f"{r['series']} at its closest D = {fmt(num(r, 'obstruction.distance_mm'))} mm: "
-                         f"{int(num(r, 'clog_n'))} clogs, emptied in {int(num(r, 'J_paper_n'))} of "
-                         f"{int(num(r, 'n_runs'))}" for r in closest)
+                         f"{count(r, 'clog_n')} clogs, emptied in {count(r, 'J_paper_n')} of "
+                         f"{count(r, 'n_runs')}" for r in closest)
     claim = "clogging appears between obstruction and walls (IV, Fig. 2b)"
     if not clogged:
         t.add(claim, model, evidence, "not held", LOCATION_RULE)
@@ -172,8 +179,8 @@ def clog_location_claim(t, model, closest, loc):
         return
     controls = [r for r in rows if r["series"] in CONTROLS]
     shapes = {}
-    for r in rows:
-        if r["series"] not in CONTROLS:
+    for r in rows:  # a shape's point without a distance cannot be its closest position
+        if r["series"] not in CONTROLS and math.isfinite(num(r, "obstruction.distance_mm")):
             shapes.setdefault(r["series"], []).append(r)
     nearest = {name: min(rs, key=lambda r: num(r, "obstruction.distance_mm")) for name, rs in shapes.items()}
     evidence += "; where (clog-location): " + "; ".join(located_text(r) for r in controls + sum(shapes.values(), []))

@@ -25,11 +25,11 @@ std::string fmt_interval(const Interval& i, int digits) { return fmt_ci(i.lo, i.
 
 std::string fmt_clogs(const ClogStatistics& c) {
   if (c.n_located == 0) return fmt::format("{}", c.n);
-  std::string out = c.n_contact_not_measured > 0
-                        ? fmt::format("{}: {} at gap, {} upstream ({} by front distance only)", c.n, c.n_at_gap,
-                                      c.n_upstream, c.n_contact_not_measured)
-                        : fmt::format("{}: {} at gap, {} on obstruction, {} upstream", c.n, c.n_at_gap,
-                                      c.n_on_obstruction, c.n_upstream);
+  // Clogs located by their front distance alone are in "at gap" or "upstream"; some of them
+  // may have leaned on the obstruction, so its count is then a lower bound.
+  std::string out = fmt::format("{}: {} at gap, {}{} on obstruction, {} upstream", c.n, c.n_at_gap,
+                                c.n_contact_not_measured > 0 ? ">= " : "", c.n_on_obstruction, c.n_upstream);
+  if (c.n_contact_not_measured > 0) out += fmt::format(" ({} by front distance only)", c.n_contact_not_measured);
   if (c.n_located < c.n) out += fmt::format(", {} not located", c.n - c.n_located);
   return out;
 }

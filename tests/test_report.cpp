@@ -342,6 +342,7 @@ TEST(PaperClaims, ClogsBetweenObstructionAndWallsNeedTheirLocationAndWorkingCont
                  "obstruction.distance_mm\n"
                  "narrow-gap,2d,4,10,10," + plain_at_gap + "," + zero + ",\n"
                  "narrow-gap-far-cylinder,2d,4,10,10,10," + far_on + ",150\n"
+                 "cylinder,2d,4,10,10,0," + (close_on.empty() ? "" : "9") + ",\n"  // no distance: never the closest
                  "cylinder,2d,4,10,10,0," + close_on + ",70\n"
                  "cylinder,2d,4,0,0,0," + zero + ",90\n");
     }

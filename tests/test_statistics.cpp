@@ -448,4 +448,5 @@ TEST(Wilson, MatchesHandComputedIntervalsAndStaysInsideZeroOne) {
   EXPECT_NEAR(all.hi, 1.0, 1e-12);
   EXPECT_LT(all.lo, 1.0);
   EXPECT_FALSE(wilson_interval(0, 0).valid());
+  EXPECT_THROW(wilson_interval(11, 10), std::invalid_argument);
 }
