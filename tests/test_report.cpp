@@ -278,6 +278,29 @@ TEST(ReportPlots, ScriptDrawsMissingValuesAndAsymmetricBars) {
   EXPECT_NE(read_text(dir / "plots.json").find("null"), std::string::npos) << "NaN is written as null";
 }
 
+namespace {
+
+// studies/paper_claims.py run on `results`: the claims.md row of `claim` for `model`
+// (empty, and a test failure, if the script fails or has no such row). `out` keeps its output.
+std::string claims_row(const fs::path& python, const fs::path& results, const fs::path& out, const std::string& claim,
+                       const std::string& model) {
+  const int rc = run_program(
+      {python.string(), (fs::path(GAPFLOW_SOURCE_DIR) / "studies" / "paper_claims.py").string(), results.string()}, out);
+  EXPECT_EQ(rc, 0) << read_text(out);
+  const std::string md = read_text(out);
+  const auto line = md.find("| " + claim + " | " + model + " |");
+  EXPECT_NE(line, std::string::npos) << md;
+  return line == std::string::npos ? std::string() : md.substr(line, md.find('\n', line) - line);
+}
+
+// The verdict of a claims.md row (between its ** **).
+std::string verdict_of(const std::string& row) {
+  const auto v = row.find("**");
+  return v == std::string::npos ? std::string() : row.substr(v + 2, row.find("**", v + 2) - v - 2);
+}
+
+}  // namespace
+
 // studies/paper_claims.py: a significant peak is the best of several positions, so the
 // claim is held only if the re-test with fresh seeds (cylinder-peak-3d) finds it too.
 TEST(PaperClaims, APeakIsHeldOnlyIfItsReTestReproducesIt) {
@@ -297,14 +320,7 @@ TEST(PaperClaims, APeakIsHeldOnlyIfItsReTestReproducesIt) {
                header + "none,3d,10,10,65.9,0,,0,7.75,,,,,1\n"
                         "cylinder,3d,10,10,65.9,0,,14.19,7.75,1.0,0.98,1.02," + retest_verdict + ",1\n");
     const fs::path out = dir / ("claims_" + retest_verdict + ".md");  // run_program appends to its log
-    const int rc = run_program({*python, (fs::path(GAPFLOW_SOURCE_DIR) / "studies" / "paper_claims.py").string(),
-                                dir.path().string()},
-                               out);
-    EXPECT_EQ(rc, 0) << read_text(out);
-    const std::string md = read_text(out);
-    const auto line = md.find("| cylinder: peak above J_0 (waiting room) (IV) | 3d |");
-    EXPECT_NE(line, std::string::npos) << md;
-    return md.substr(line, md.find('\n', line) - line);
+    return claims_row(*python, dir.path(), out, "cylinder: peak above J_0 (waiting room) (IV)", "3d");
   };
   const std::string refuted = claims_with_retest("not distinguishable");
   EXPECT_NE(refuted.find("not reproduced"), std::string::npos) << refuted;
@@ -347,16 +363,7 @@ TEST(PaperClaims, ClogsBetweenObstructionAndWallsNeedTheirLocationAndWorkingCont
                  "cylinder,2d,4,0,0,0," + zero + ",90\n");
     }
     const fs::path out = dir / fmt::format("claims_{}.md", ++call);
-    const int rc = run_program({*python, (fs::path(GAPFLOW_SOURCE_DIR) / "studies" / "paper_claims.py").string(),
-                                dir.path().string()},
-                               out);
-    EXPECT_EQ(rc, 0) << read_text(out);
-    const std::string md = read_text(out);
-    const auto line = md.find("| clogging appears between obstruction and walls (IV, Fig. 2b) | 2d |");
-    EXPECT_NE(line, std::string::npos) << md;
-    const std::string row = md.substr(line, md.find('\n', line) - line);
-    const auto v = row.find("**");
-    return row.substr(v + 2, row.find("**", v + 2) - v - 2);
+    return verdict_of(claims_row(*python, dir.path(), out, "clogging appears between obstruction and walls (IV, Fig. 2b)", "2d"));
   };
   EXPECT_EQ(verdict_with("-", "", ""), "partly held") << "location not measured";
   EXPECT_EQ(verdict_with("10", "0", "9"), "held") << "9 of 10 on the obstruction, controls hold";
