@@ -95,7 +95,7 @@ bool clog_at_gap(double front_m, double gap_m, double diameter_m);
 //    walls, wherever that is; with the obstruction within reach of the gap this is the
 //    only way to tell it from an arch across the gap, since both keep the mouth occupied;
 //  * gap: otherwise, when the gap's mouth is occupied (clog_at_gap);
-//  * upstream: otherwise (the mouth ran empty and no front particle touches the obstruction).
+//  * upstream: otherwise (the mouth ran empty and the arch does not lean on the obstruction).
 // A record made before on_obstruction was measured is classified by its front alone (gap or upstream).
 std::optional<ClogSite> clog_site(const Clog& clog, double gap_m, double diameter_m);
 
