@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
 
 namespace gapflow {
 
-std::vector<int> visible_from(const ObstructionGeometry& obstruction, const std::vector<BoardDisc>& discs, Vec2 eye) {
+namespace {
+
+// For each of `discs`, whether it has a free line of sight to `eye` (visible_from).
+std::vector<char> seen_from(const ObstructionGeometry& obstruction, const std::vector<BoardDisc>& discs, Vec2 eye) {
   // A disc q can cut the segment from p to the eye only if |q - eye| < |p - eye| + r_q
   // <= |p - eye| + r_max: scan candidate occluders in order of distance and stop past that.
   std::vector<double> reach(discs.size());
@@ -22,53 +24,51 @@ std::vector<int> visible_from(const ObstructionGeometry& obstruction, const std:
   std::iota(by_reach.begin(), by_reach.end(), size_t{0});
   std::sort(by_reach.begin(), by_reach.end(), [&](size_t a, size_t b) { return reach[a] < reach[b]; });
 
-  std::vector<int> visible;
+  std::vector<char> seen(discs.size(), 0);
   for (size_t i = 0; i < discs.size(); ++i) {
     const BoardDisc& p = discs[i];
     if (obstruction_blocks_segment(obstruction, p.centre, eye)) continue;
-    bool seen = true;
+    seen[i] = 1;
     for (size_t j : by_reach) {
       if (reach[j] > reach[i] + r_max) break;
-      const BoardDisc& q = discs[j];
-      if (q.id != p.id && distance_to_segment(q.centre, p.centre, eye) < q.radius) {
-        seen = false;
+      if (j != i && distance_to_segment(discs[j].centre, p.centre, eye) < discs[j].radius) {
+        seen[i] = 0;
         break;
       }
     }
-    if (seen) visible.push_back(p.id);
   }
-  return visible;
+  return seen;
 }
-
-namespace {
 
 // For each of `discs`, whether the gap sees it (visible_from_gap).
 std::vector<char> seen_from_gap(const CompiledScenario& sc, const ObstructionGeometry& obstruction,
                                 const std::vector<BoardDisc>& discs) {
   const int points = static_cast<int>(std::ceil(2 * sc.gap / sc.nominal_diameter)) + 1;
   std::vector<char> seen(discs.size(), 0);
-  std::vector<size_t> index_of_id;  // ids are particle indices: small, non-negative, unique
-  for (size_t i = 0; i < discs.size(); ++i) {
-    const auto id = static_cast<size_t>(discs[i].id);
-    if (index_of_id.size() <= id) index_of_id.resize(id + 1);
-    index_of_id[id] = i;
-  }
   for (int k = 0; k < points; ++k) {
     const Vec2 eye{-sc.gap / 2 + (k + 0.5) * sc.gap / points, 0};
-    for (int id : visible_from(obstruction, discs, eye)) seen[index_of_id[static_cast<size_t>(id)]] = 1;
+    const std::vector<char> from_here = seen_from(obstruction, discs, eye);
+    for (size_t i = 0; i < discs.size(); ++i) seen[i] = seen[i] || from_here[i];
   }
   return seen;
 }
 
+std::vector<int> ids_of(const std::vector<BoardDisc>& discs, const std::vector<char>& chosen) {
+  std::vector<int> out;
+  for (size_t i = 0; i < discs.size(); ++i)
+    if (chosen[i]) out.push_back(discs[i].id);
+  return out;
+}
+
 }  // namespace
+
+std::vector<int> visible_from(const ObstructionGeometry& obstruction, const std::vector<BoardDisc>& discs, Vec2 eye) {
+  return ids_of(discs, seen_from(obstruction, discs, eye));
+}
 
 std::vector<int> visible_from_gap(const CompiledScenario& sc, const ObstructionGeometry& obstruction,
                                   const std::vector<BoardDisc>& discs) {
-  const std::vector<char> seen = seen_from_gap(sc, obstruction, discs);
-  std::vector<int> out;
-  for (size_t i = 0; i < discs.size(); ++i)
-    if (seen[i]) out.push_back(discs[i].id);
-  return out;
+  return ids_of(discs, seen_from_gap(sc, obstruction, discs));
 }
 
 ObstructionGeometry displaced(const ObstructionGeometry& g, Vec2 offset) {

@@ -25,9 +25,10 @@ struct BoardDisc {
 };
 
 // Two spheres whose outlines are closer than this (in nominal diameters) touch:
-// resting contacts overlap or part by ~0.01 d in both engines (Box2D's speculative
-// margin is 0.02 units = 0.02 d). Tighter than kBoundaryContactTolerance_d, so that
-// two arches that merely come close are not read as one.
+// resting contacts overlap by about Box2D 2.4's linear slop, 0.005 units (0.005 d at
+// the default engine_diameter of 1), and 0.02 d leaves room for that and round-off.
+// Tighter than kBoundaryContactTolerance_d, so that two arches that merely come
+// close are not read as one (tests/test_clog_front.cpp).
 constexpr double kDiscContactTolerance_d = 0.02;
 // A sphere touches a wall or the obstruction within this (in nominal diameters) plus
 // that body's current shaking displacement: a shaken body moves at 20 Hz, faster

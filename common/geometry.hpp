@@ -91,8 +91,8 @@ double clearance_to_bottleneck_walls(const CompiledScenario& c, Vec2 p);
 // Whether a disc of `radius` (m) centred at p lies on the open board: inside the
 // retaining and bottleneck walls, clear of the obstruction, below the top wall, above the gap line.
 bool fits_on_board(const CompiledScenario& c, Vec2 p, double radius);
-// Distance (m) from a point to the obstruction's outline at its rest position (negative
-// inside; huge without an obstruction).
+// Distance (m) from a point to the outline of `g` (the compiled rest position, or one
+// displaced by shaking; negative inside; huge without an obstruction).
 double obstruction_distance(const ObstructionGeometry& g, Vec2 p);
 // Whether the segment [a, b] passes through the obstruction (touching its outline does not count
 // for a cylinder; for a polygon it does).

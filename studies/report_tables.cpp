@@ -253,11 +253,15 @@ void avalanche_and_clog_columns(CsvRow& row, const PointStatistics& s) {
   row.num("clog_censored_fraction", s.clogs.fraction_censored);
   row.num("clog_hill_alpha", s.clogs.tail.valid() ? s.clogs.tail.alpha : kNaN);
   row.count("clog_located_n", s.clogs.n_located);
-  row.count("clog_at_gap_n", s.clogs.n_at_gap);
-  // Unknown (blank) when some clog was located by its front distance alone.
-  row.num("clog_on_obstruction_n",
-          s.clogs.n_contact_not_measured > 0 ? kNaN : static_cast<double>(s.clogs.n_on_obstruction));
-  row.count("clog_upstream_n", s.clogs.n_upstream);
+  // The sites are counts over the located clogs: blank where clogs were stored without a
+  // location (a 0 would read as "none there"); on the obstruction also blank where some
+  // clog was located by its front distance alone.
+  const ClogStatistics& c = s.clogs;
+  const bool unlocated = c.n_located == 0 && c.n > 0;
+  auto site = [&](std::size_t k, bool known) { return known ? static_cast<double>(k) : kNaN; };
+  row.num("clog_at_gap_n", site(c.n_at_gap, !unlocated));
+  row.num("clog_on_obstruction_n", site(c.n_on_obstruction, !unlocated && c.n_contact_not_measured == 0));
+  row.num("clog_upstream_n", site(c.n_upstream, !unlocated));
   row.num("clog_median_front_d", s.clogs.median_front_d);
 }
 

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <algorithm>
 #include <cmath>
@@ -372,6 +373,38 @@ TEST(PaperClaims, ClogsBetweenObstructionAndWallsNeedTheirLocationAndWorkingCont
   EXPECT_EQ(verdict_with("", "0", "9"), "not testable") << "the plain control's sites are unknown";
   EXPECT_EQ(verdict_with("10", "3", "9"), "not testable") << "the far cylinder takes clogs it cannot cause";
   EXPECT_EQ(verdict_with("10", "", ""), "partly held") << "written before obstruction contact was measured";
+}
+
+// Where the clogs formed, in points.csv: counts over the located clogs. In a store written
+// before clogs were located (here: the location columns emptied), the sites are blank, not 0,
+// which would read as "none there".
+TEST_F(ReportTiny, ClogSitesAreCountedWhereLocatedAndBlankWhereNot) {
+  auto clogged_rows = [](const Csv& csv) {
+    std::vector<std::size_t> rows;
+    for (std::size_t i = 0; i < csv.rows.size(); ++i)
+      if (csv.at(i, "clog_n") != "0") rows.push_back(i);
+    return rows;
+  };
+  const Csv located = read_csv(make(false).points_csv);
+  ASSERT_FALSE(clogged_rows(located).empty()) << "tiny.toml's narrow gap clogs";
+  for (std::size_t i : clogged_rows(located)) {
+    EXPECT_EQ(located.at(i, "clog_located_n"), located.at(i, "clog_n"));
+    EXPECT_EQ(located.at(i, "clog_on_obstruction_n"), "0") << "no obstruction in tiny.toml";
+    EXPECT_EQ(std::stoi(located.at(i, "clog_at_gap_n")) + std::stoi(located.at(i, "clog_upstream_n")),
+              std::stoi(located.at(i, "clog_n")));
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir / "runs.sqlite").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "UPDATE clogs SET front_m = NULL, on_obstruction = NULL", nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  const Csv unlocated = read_csv(make(false).points_csv);
+  ASSERT_EQ(clogged_rows(unlocated), clogged_rows(located));
+  for (std::size_t i : clogged_rows(unlocated)) {
+    EXPECT_EQ(unlocated.at(i, "clog_located_n"), "0");
+    for (const char* site : {"clog_at_gap_n", "clog_on_obstruction_n", "clog_upstream_n"})
+      EXPECT_EQ(unlocated.at(i, site), "") << site;
+  }
 }
 
 TEST_F(ReportTiny, EveryAnalysisKindRunsOnRealDataWithoutCrashing) {
