@@ -8,7 +8,7 @@
 #include "app/cli_errors.hpp"
 #include "app/cmd_report.hpp"
 #include "app/cmd_study.hpp"
-#include "app/models.hpp"
+#include "models/registry.hpp"
 #include "common/geometry.hpp"
 #include "common/scenario_loader.hpp"
 #include "common/statistics.hpp"

@@ -7,7 +7,7 @@
 // only the project libraries, so the test can use this without a bench library.
 #pragma once
 
-#include "app/models.hpp"
+#include "models/registry.hpp"
 #include "common/scenario_loader.hpp"
 #include "common/shaking.hpp"
 

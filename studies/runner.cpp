@@ -1,6 +1,6 @@
 #include "studies/runner.hpp"
 
-#include "app/models.hpp"
+#include "models/registry.hpp"
 
 #include <fmt/format.h>
 

@@ -14,7 +14,7 @@
 //   [report]    kind (string or list), baseline, j
 #pragma once
 
-#include "app/models.hpp"
+#include "models/registry.hpp"
 #include "common/scenario_loader.hpp"
 
 #include <cstdint>

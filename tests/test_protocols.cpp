@@ -1,5 +1,5 @@
 // Clog-breaking and re-injection protocols.
-#include "app/models.hpp"
+#include "models/registry.hpp"
 #include "common/protocols.hpp"
 #include "common/vec2_math.hpp"
 #include "tests/test_support.hpp"

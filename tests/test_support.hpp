@@ -1,7 +1,7 @@
 // Helpers shared by the tests: scenario loading from text or from scenarios/.
 #pragma once
 
-#include "app/models.hpp"
+#include "models/registry.hpp"
 #include "common/geometry.hpp"
 #include "common/scenario_loader.hpp"
 

@@ -1,4 +1,5 @@
-// Model registry: the one place that knows every engine.
+// Model registry: the one place that knows every engine (models/ sits between the
+// engines, sim2d/ and sim3d/, and everything that runs them: studies, calibration, app).
 #pragma once
 
 #include "common/simulation.hpp"

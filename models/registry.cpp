@@ -1,4 +1,4 @@
-#include "app/models.hpp"
+#include "models/registry.hpp"
 
 #include "sim2d/model2d.hpp"
 #include "sim3d/model3d.hpp"
