@@ -1,5 +1,6 @@
 #include "app/cmd_study.hpp"
 
+#include "app/cancel_on_signal.hpp"
 #include "app/cli_errors.hpp"
 #include "common/text_file.hpp"
 
@@ -33,34 +34,6 @@ struct StudyCommands::Options {
 };
 
 namespace {
-
-constexpr int kInterrupted = 130;  // 128 + SIGINT, what shells report for Ctrl-C
-
-// Raised by SIGINT/SIGTERM; the workers' run_model calls poll it between steps.
-std::atomic<bool> g_cancel{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
-
-extern "C" void on_signal(int) { g_cancel.store(true); }
-
-// Ctrl-C cancels the study; SA_RESETHAND makes a second Ctrl-C kill at once.
-class CancelOnSignal {
- public:
-  CancelOnSignal() {
-    struct sigaction sa {};
-    sa.sa_handler = on_signal;
-    sa.sa_flags = SA_RESETHAND;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int_);
-    sigaction(SIGTERM, &sa, &old_term_);
-  }
-  ~CancelOnSignal() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-
- private:
-  struct sigaction old_int_ {}, old_term_ {};
-};
 
 // --quick has its own store: its screen may confirm other points than the full
 // study's, and those must not pass for the full study's confirmation.

@@ -333,42 +333,62 @@ void Store::put(const JobIdentity& id, const RunRecord& r) {
   tx.commit();
 }
 
-std::vector<StoredRun> Store::load(const std::optional<std::string>& study) const {
-  std::lock_guard lock(mutex_);
-  Statement s(db_, R"sql(SELECT
+namespace {
+
+constexpr const char* kRunColumns = R"sql(
       job_key, study, series, point, point_label, axes_json, model, replicate, base_seed, run_seed,
       scenario_hash, scenario_name, code_version, particles, passed, reinjected, perturbations, escaped,
       max_conservation_error, sim_time_s, wall_time_s, end_reason, regime, j_paper, j_flowing, j_mid,
-      diameter_m, gap_m, distance_m, incline_rad, time_step_s, finished_at
-    FROM runs WHERE ?1 IS NULL OR study = ?1 ORDER BY job_key)sql");
+      diameter_m, gap_m, distance_m, incline_rad, time_step_s, finished_at)sql";
+
+// One row of `runs` (the statement selects kRunColumns), without child rows.
+StoredRun read_run_row(Statement& s) {
+  StoredRun run;
+  JobIdentity& id = run.id;
+  RunRecord& r = run.record;
+  int c = 0;
+  id.key = s.text(c++), id.study = s.text(c++), id.series = s.text(c++), id.point = s.integer(c++);
+  id.point_label = s.text(c++), id.axes_json = s.text(c++), id.model = s.text(c++);
+  id.replicate = s.integer(c++), id.base_seed = static_cast<std::uint64_t>(s.int64(c++));
+  id.run_seed = from_hex(s.text(c++)), id.scenario_hash = from_hex(s.text(c++));
+  r.model = id.model, r.replicate = id.replicate, r.base_seed = id.base_seed;
+  r.run_seed = id.run_seed, r.scenario_hash = id.scenario_hash;
+  r.scenario_name = s.text(c++), run.code_version = s.text(c++);
+  r.particles = s.integer(c++), r.passed = s.integer(c++), r.reinjected = s.integer(c++);
+  r.perturbations = s.integer(c++), r.escaped = s.integer(c++);
+  r.max_conservation_error = s.integer(c++), r.sim_time_s = s.real(c++), r.wall_time_s = s.real(c++);
+  r.end_reason = parse_enum(s.text(c++), {EndReason::all_passed, EndReason::n_passed, EndReason::time_limit,
+                                          EndReason::permanent_clog});
+  r.regime = parse_enum(s.text(c++), {Regime::continuous, Regime::intermittent, Regime::clogged});
+  r.j_paper = s.optional_real(c++), r.j_flowing = s.optional_real(c++), r.j_mid = s.optional_real(c++);
+  r.diameter_m = s.real(c++), r.gap_m = s.real(c++), r.distance_m = s.real(c++);
+  r.incline_rad = s.real(c++), r.time_step_s = s.real(c++), run.finished_at = s.text(c++);
+  return run;
+}
+
+}  // namespace
+
+std::vector<StoredRun> Store::load(const std::optional<std::string>& study) const {
+  std::lock_guard lock(mutex_);
+  const std::string sql = std::string("SELECT ") + kRunColumns + " FROM runs WHERE ?1 IS NULL OR study = ?1 ORDER BY job_key";
+  Statement s(db_, sql.c_str());
   if (study) s.bind(1, *study);
   std::vector<StoredRun> out;
-  while (s.step()) {
-    StoredRun run;
-    JobIdentity& id = run.id;
-    RunRecord& r = run.record;
-    int c = 0;
-    id.key = s.text(c++), id.study = s.text(c++), id.series = s.text(c++), id.point = s.integer(c++);
-    id.point_label = s.text(c++), id.axes_json = s.text(c++), id.model = s.text(c++);
-    id.replicate = s.integer(c++), id.base_seed = static_cast<std::uint64_t>(s.int64(c++));
-    id.run_seed = from_hex(s.text(c++)), id.scenario_hash = from_hex(s.text(c++));
-    r.model = id.model, r.replicate = id.replicate, r.base_seed = id.base_seed;
-    r.run_seed = id.run_seed, r.scenario_hash = id.scenario_hash;
-    r.scenario_name = s.text(c++), run.code_version = s.text(c++);
-    r.particles = s.integer(c++), r.passed = s.integer(c++), r.reinjected = s.integer(c++);
-    r.perturbations = s.integer(c++), r.escaped = s.integer(c++);
-    r.max_conservation_error = s.integer(c++), r.sim_time_s = s.real(c++), r.wall_time_s = s.real(c++);
-    r.end_reason = parse_enum(s.text(c++), {EndReason::all_passed, EndReason::n_passed, EndReason::time_limit,
-                                            EndReason::permanent_clog});
-    r.regime = parse_enum(s.text(c++), {Regime::continuous, Regime::intermittent, Regime::clogged});
-    r.j_paper = s.optional_real(c++), r.j_flowing = s.optional_real(c++), r.j_mid = s.optional_real(c++);
-    r.diameter_m = s.real(c++), r.gap_m = s.real(c++), r.distance_m = s.real(c++);
-    r.incline_rad = s.real(c++), r.time_step_s = s.real(c++), run.finished_at = s.text(c++);
-    out.push_back(std::move(run));
-  }
+  while (s.step()) out.push_back(read_run_row(s));
   const std::string columns = clog_columns(db_);
   for (StoredRun& run : out) load_children(db_, run.id.key, columns, run.record);
   return out;
+}
+
+std::optional<StoredRun> Store::get(const std::string& key) const {
+  std::lock_guard lock(mutex_);
+  const std::string sql = std::string("SELECT ") + kRunColumns + " FROM runs WHERE job_key = ?1";
+  Statement s(db_, sql.c_str());
+  s.bind(1, key);
+  if (!s.step()) return std::nullopt;
+  StoredRun run = read_run_row(s);
+  load_children(db_, run.id.key, clog_columns(db_), run.record);
+  return run;
 }
 
 void Store::record_study_file(const std::string& study, const std::string& source, const std::string& text) {

@@ -64,6 +64,8 @@ class Store {
 
   // Every stored run (of one study, when given), in job-key order.
   std::vector<StoredRun> load(const std::optional<std::string>& study = std::nullopt) const;
+  // One stored run by job key, child rows included (empty when not stored).
+  std::optional<StoredRun> get(const std::string& key) const;
 
   // Keep (or replace) the study file of `study`: the last one run is the one recorded.
   void record_study_file(const std::string& study, const std::string& source, const std::string& text);

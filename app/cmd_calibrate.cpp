@@ -1,0 +1,137 @@
+#include "app/cmd_calibrate.hpp"
+
+#include "app/cancel_on_signal.hpp"
+#include "app/cli_errors.hpp"
+#include "calibrate/calibration_report.hpp"
+#include "calibrate/twin.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <iostream>
+#include <thread>
+#include <unistd.h>
+
+namespace gapflow {
+
+struct CalibrateCommands::Options {
+  CLI::App* calibrate = nullptr;
+  CLI::App* twin = nullptr;
+  std::string data_file, model = "2d", out, db, truth;
+  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  bool no_plots = false;
+  int max_effects = 2;
+  // twin
+  std::uint64_t seed = 1;
+  std::vector<std::string> effects, set;
+  int replicates = 10;
+  std::string name;
+};
+
+namespace {
+
+EvaluatorOptions evaluator_options(const CalibrateCommands::Options& o) {
+  EvaluatorOptions e;
+  e.model = parse_model_kind(o.model);
+  e.workers = o.jobs;
+  e.cancel = &g_cancel;
+  e.progress = &std::cerr;
+  e.tty = isatty(STDERR_FILENO) != 0;
+  return e;
+}
+
+int cmd_calibrate(const CalibrateCommands::Options& o) {
+  const DataFile data = load_data_file(o.data_file);
+  const std::filesystem::path out = o.out.empty() ? std::filesystem::path("results/calibration") / data.name : std::filesystem::path(o.out);
+  const std::filesystem::path db = o.db.empty() ? out / "runs.sqlite" : std::filesystem::path(o.db);
+  CalibrationDef def;
+  def.model = parse_model_kind(o.model);
+  def.max_effects = o.max_effects;
+  Store store(db);
+  g_cancel.store(false);
+  CancelOnSignal signals;
+  Evaluator ev(data, store, evaluator_options(o));
+  std::cerr << fmt::format("calibrate '{}' against the {} model: {} points ({} held out), {} replicates per point, store {}\n",
+                           data.name, o.model, data.points.size(), data.points.size() - data.fitted_count(),
+                           data.model_replicates, db.string());
+  try {
+    const CalibrationResult r = calibrate(data, def, ev);
+    write_calibration_outputs(data, r, out, !o.no_plots);
+    std::cout << fmt::format("{}: {}", data.name, r.verdict);
+    for (const AddedEffect& e : r.effects) std::cout << fmt::format("; {} = {:.4g} [{:.4g}, {:.4g}]", e.key, e.value, e.lo95, e.hi95);
+    std::cout << fmt::format("\nheld-out RMS/noise {:.2f} -> {:.2f}, fitted chi2/nu {:.2f} -> {:.2f}; report {}\n",
+                             r.before.held_out.rms_whitened, r.after.held_out.rms_whitened, r.before.fitted.chi.per_dof(),
+                             r.after.fitted.chi.per_dof(), (out / "report.md").string());
+    return 0;
+  } catch (const RunCancelled&) {
+    std::cerr << fmt::format("interrupted: {} runs stored in {}; run the same command again to resume\n", store.count(),
+                             db.string());
+    return kInterrupted;
+  }
+}
+
+int cmd_twin(const CalibrateCommands::Options& o) {
+  const DataFile design = load_data_file(o.data_file);
+  if (std::filesystem::exists(o.out) || std::filesystem::exists(o.truth))
+    throw std::invalid_argument(fmt::format("twin: {} or {} exists already; twins never overwrite files", o.out, o.truth));
+  TwinDef def;
+  def.name = o.name.empty() ? std::filesystem::path(o.out).stem().string() : o.name;
+  def.model = parse_model_kind(o.model);
+  def.seed = o.seed;
+  def.effects = o.effects;
+  def.set = o.set;
+  def.replicates = o.replicates;
+  (void)draw_twin(design, def);  // bad effect names and sizes are input errors, before anything runs
+  const std::filesystem::path db = o.db.empty() ? std::filesystem::path(o.out).parent_path() / "twin_runs.sqlite"
+                                                : std::filesystem::path(o.db);
+  Store store(db);
+  g_cancel.store(false);
+  CancelOnSignal signals;
+  Evaluator ev(design, store, evaluator_options(o));
+  try {
+    make_twin(design, def, ev, o.out, o.truth);
+  } catch (const RunCancelled&) {
+    std::cerr << "interrupted; run the same command again to resume\n";
+    return kInterrupted;
+  }
+  std::cout << fmt::format("twin '{}' written to {} (truth in {})\n", def.name, o.out, o.truth);
+  return 0;
+}
+
+}  // namespace
+
+CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Options>()) {
+  Options& o = *o_;
+  o.calibrate = app.add_subcommand(
+      "calibrate", "Fit a model to a measured-data file, trace the residual to a missing effect, report before/after");
+  o.calibrate->add_option("data", o.data_file, "Measured-data file (TOML), e.g. data/examples/gap_sweep_twin.toml")->required();
+  o.calibrate->add_option("--model", o.model, "Model: 2d or 3d")->check(CLI::IsMember({"2d", "3d"}));
+  o.calibrate->add_option("--jobs", o.jobs, "Worker threads (results do not depend on it)")->check(CLI::Range(1, 1024));
+  o.calibrate->add_option("--out", o.out, "Output folder (default results/calibration/<data name>/)");
+  o.calibrate->add_option("--db", o.db, "Runs store (default <out>/runs.sqlite; calibrations may share one)");
+  o.calibrate->add_option("--max-effects", o.max_effects, "Rounds of adding an effect")->check(CLI::Range(0, 4));
+  o.calibrate->add_flag("--no-plots", o.no_plots, "Do not draw the PNG figures");
+
+  o.twin = app.add_subcommand("twin", "Write a data file made by a model with hidden effects (truth in a separate file)");
+  o.twin->add_option("data", o.data_file, "Data file whose design (points, observable, free parameters) the twin copies")->required();
+  o.twin->add_option("--out", o.out, "The twin data file to write (must not exist)")->required();
+  o.twin->add_option("--truth", o.truth, "Where the planted values go (JSON; must not exist)")->required();
+  o.twin->add_option("--model", o.model, "Model that makes the data: 2d or 3d")->check(CLI::IsMember({"2d", "3d"}));
+  o.twin->add_option("--seed", o.seed, "Draws the hidden sizes and the free parameters' true values");
+  o.twin->add_option("--effect", o.effects, "Catalogue effect to plant: NAME, NAME:low, NAME:high or NAME=VALUE (repeatable)");
+  o.twin->add_option("--set", o.set, "Plant key=value as it is (e.g. an effect outside the catalogue; repeatable)");
+  o.twin->add_option("--replicates", o.replicates, "Runs per point behind each value")->check(CLI::Range(2, 1000));
+  o.twin->add_option("--name", o.name, "[data] name of the twin (default: the file's stem)");
+  o.twin->add_option("--jobs", o.jobs, "Worker threads")->check(CLI::Range(1, 1024));
+  o.twin->add_option("--db", o.db, "Runs store (default: twin_runs.sqlite beside --out)");
+}
+
+CalibrateCommands::~CalibrateCommands() = default;
+
+std::optional<int> CalibrateCommands::run() const {
+  if (o_->calibrate->parsed()) return exit_code_of([&] { return cmd_calibrate(*o_); });
+  if (o_->twin->parsed()) return exit_code_of([&] { return cmd_twin(*o_); });
+  return std::nullopt;
+}
+
+}  // namespace gapflow

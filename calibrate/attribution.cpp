@@ -1,0 +1,81 @@
+#include "calibrate/attribution.hpp"
+
+#include "common/statistics.hpp"
+
+#include <cmath>
+#include <numeric>
+
+namespace gapflow {
+
+Eigen::MatrixXd projector_out(const Eigen::MatrixXd& X) {
+  const Eigen::Index n = X.rows();
+  Eigen::MatrixXd P = Eigen::MatrixXd::Identity(n, n);
+  if (X.cols() == 0) return P;
+  // Orthonormal basis of X's column space (rank-revealing QR: collinear columns are dropped).
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
+  const Eigen::Index rank = qr.rank();
+  const Eigen::MatrixXd Q = Eigen::MatrixXd(qr.householderQ()).leftCols(rank);
+  return P - Q * Q.transpose();
+}
+
+double abs_cosine(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const double na = a.norm(), nb = b.norm();
+  if (na == 0 || nb == 0) return 0;
+  return std::abs(a.dot(b)) / (na * nb);
+}
+
+Score score_signature(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u) {
+  const Eigen::VectorXd pu = projector_out(X) * u;
+  Score s;
+  s.projected_norm = pu.norm();
+  if (s.projected_norm == 0) return s;
+  const double dot = pu.dot(r), nn = pu.squaredNorm();
+  s.statistic = dot * dot / nn;
+  s.p = 1 - chi_square_cdf(s.statistic, 1);
+  s.estimate = dot / nn;
+  s.se = 1 / s.projected_norm;
+  return s;
+}
+
+std::vector<std::vector<int>> indistinguishable_groups(const std::vector<Eigen::VectorXd>& signatures,
+                                                       const Eigen::MatrixXd& X, double threshold) {
+  const Eigen::MatrixXd P = projector_out(X);
+  std::vector<Eigen::VectorXd> projected;
+  for (const Eigen::VectorXd& u : signatures) projected.push_back(P * u);
+  const int n = static_cast<int>(signatures.size());
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
+    return i;
+  };
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j)
+      if (abs_cosine(projected[static_cast<std::size_t>(i)], projected[static_cast<std::size_t>(j)]) > threshold)
+        parent[static_cast<std::size_t>(root(j))] = root(i);
+  std::vector<std::vector<int>> groups;
+  std::vector<int> group_of_root(static_cast<std::size_t>(n), -1);
+  for (int i = 0; i < n; ++i) {
+    int& g = group_of_root[static_cast<std::size_t>(root(i))];
+    if (g < 0) {
+      g = static_cast<int>(groups.size());
+      groups.emplace_back();
+    }
+    groups[static_cast<std::size_t>(g)].push_back(i);
+  }
+  return groups;
+}
+
+ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_parameters) {
+  ChiSquare c;
+  c.chi2 = whitened_residual.squaredNorm();
+  c.dof = static_cast<int>(whitened_residual.size()) - fitted_parameters;
+  c.p = c.dof > 0 ? 1 - chi_square_cdf(c.chi2, c.dof) : 1.0;
+  return c;
+}
+
+double bic(double chi2, int parameters, int points) {
+  return chi2 + parameters * std::log(static_cast<double>(points));
+}
+
+}  // namespace gapflow

@@ -1,0 +1,58 @@
+// Residual attribution: the linear statistics behind "which effect does the model
+// miss?". Everything is on WHITENED quantities (divided by each point's total
+// standard error), so that under a correct model the residual r is ~ N(0, I).
+//
+// Locally the model is linear in small changes: r ~ X dtheta + u a + noise, with X
+// the sensitivities of the fitted parameters and u an effect's signature (both
+// whitened). After the baseline fit, r is orthogonal to X, so an effect can only
+// explain what X cannot: its signature with X projected out, u~ = P u,
+// P = I - X (X^T X)^-1 X^T. The score statistic for "a = 0" is
+//   S = (u~^T r)^2 / (u~^T u~)  ~ chi^2(1) under the null,
+// the linearised size estimate a^ = u~^T r / u~^T u~ with se 1/|u~|.
+// Two effects whose projected signatures point the same way (|cos| > 0.9) cannot
+// be told apart by this design: they are reported as one group.
+#pragma once
+
+#include <Eigen/Dense>
+
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+// I - X (X^T X)^+ X^T (the identity when X has no columns).
+Eigen::MatrixXd projector_out(const Eigen::MatrixXd& X);
+
+// |a.b| / (|a| |b|); 0 when either is zero.
+double abs_cosine(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
+
+struct Score {
+  double statistic = 0;     // S = (u~.r)^2 / |u~|^2
+  double p = 1;             // P(chi^2_1 > S)
+  double estimate = 0;      // linearised effect size a^ (units of the signature's denominator)
+  double se = 0;            // 1/|u~|
+  double projected_norm = 0;// |u~|: how much of the signature survives the projection
+};
+
+// The score test of one signature u against the whitened residual r, with the
+// fitted parameters' sensitivities X projected out.
+Score score_signature(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u);
+
+// Groups of signatures the design cannot tell apart: connected components of
+// |cos(P u_i, P u_j)| > threshold. Each group lists indices into `signatures`.
+std::vector<std::vector<int>> indistinguishable_groups(const std::vector<Eigen::VectorXd>& signatures,
+                                                       const Eigen::MatrixXd& X, double threshold = 0.9);
+
+struct ChiSquare {
+  double chi2 = 0;
+  int dof = 0;
+  double p = 1;  // P(chi^2_dof > chi2); 1 when dof <= 0
+  double per_dof() const { return dof > 0 ? chi2 / dof : 0; }
+};
+ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_parameters);
+
+// Bayesian information criterion for Gaussian errors of known scale:
+// chi2 + k ln n (lower is better).
+double bic(double chi2, int parameters, int points);
+
+}  // namespace gapflow

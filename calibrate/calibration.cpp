@@ -1,0 +1,302 @@
+#include "calibrate/calibration.hpp"
+
+#include "calibrate/effect_catalogue.hpp"
+#include "calibrate/fit.hpp"
+#include "common/statistics.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+
+namespace gapflow {
+
+namespace {
+
+constexpr double kInvalidResidual = 10.0;  // a point the model cannot produce counts as 10 sigma
+
+// Data minus model over the total standard error, on the fit scale (every point).
+std::vector<double> whitened_residual(const DataFile& data, const Prediction& p) {
+  std::vector<double> w;
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    if (!p.valid[i]) {
+      w.push_back(kInvalidResidual);
+      continue;
+    }
+    w.push_back((data_fit_value(data, i) - p.fit[i]) / total_sigma(data, p, i));
+  }
+  return w;
+}
+
+ErrorMeasures measure(const DataFile& data, const Prediction& p, bool held_out, int fitted_parameters) {
+  ErrorMeasures m;
+  const std::vector<double> w = whitened_residual(data, p);
+  std::vector<double> picked;
+  double sq = 0;
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    if (data.points[i].held_out != held_out) continue;
+    picked.push_back(w[i]);
+    if (!p.valid[i]) {
+      ++m.invalid;
+      continue;
+    }
+    const double e = data_fit_value(data, i) - p.fit[i];
+    sq += e * e;
+  }
+  m.n = static_cast<int>(picked.size());
+  if (m.n == 0) return m;
+  const int valid = m.n - m.invalid;
+  m.rmse = valid > 0 ? std::sqrt(sq / valid) : kNaN;
+  const Eigen::VectorXd v = Eigen::Map<const Eigen::VectorXd>(picked.data(), m.n);
+  m.chi = chi_square_of(v, held_out ? 0 : fitted_parameters);
+  m.rms_whitened = std::sqrt(m.chi.chi2 / m.n);
+  return m;
+}
+
+ModelState make_state(const DataFile& data, const ParameterSet& params, const Prediction& p, int fitted_parameters) {
+  ModelState s;
+  s.params = params;
+  s.prediction = p;
+  s.whitened = whitened_residual(data, p);
+  s.fitted = measure(data, p, false, fitted_parameters);
+  s.held_out = measure(data, p, true, fitted_parameters);
+  s.bic = bic(s.fitted.chi.chi2, fitted_parameters, s.fitted.n);
+  return s;
+}
+
+// The fitted points of a per-point vector, whitened by the state's total sigma.
+Eigen::VectorXd fitted_whitened(const DataFile& data, const Prediction& at, const std::vector<double>& per_point) {
+  std::vector<double> v;
+  for (std::size_t i = 0; i < data.points.size(); ++i)
+    if (!data.points[i].held_out) v.push_back(at.valid[i] ? per_point[i] / total_sigma(data, at, i) : 0.0);
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+// A step that stays inside [lo, hi] from `at` (reversed if needed).
+double step_inside(double at, double step, double lo, double hi) {
+  if (at + step <= hi + 1e-12 && at + step >= lo - 1e-12) return step;
+  return -step;
+}
+
+}  // namespace
+
+namespace {
+
+class Loop {
+ public:
+  Loop(const DataFile& data, const CalibrationDef& def, Evaluator& ev, CalibrationResult& out)
+      : data_(data), def_(def), ev_(ev), out_(out) {}
+
+  void say(const std::string& line) {
+    out_.log.push_back(line);
+    std::cerr << "calibrate: " << line << "\n";
+  }
+
+  // The slope of every applicable effect at the nodes next to the fit: each moved
+  // by its physical step under common random numbers, all in one batch of runs.
+  std::vector<Candidate> signatures(const BaselineFit& base, std::vector<EffectTerm>& terms) {
+    std::vector<Candidate> cands;
+    std::vector<ParameterSet> sets;
+    for (const EffectDef& e : effect_catalogue()) {
+      if (!effect_applies(e, def_.model, data_)) continue;
+      Candidate c;
+      c.effect = e.name;
+      c.key = e.key;
+      c.neutral = neutral_value(e, data_);
+      c.step = step_inside(c.neutral, e.step, e.lo, e.hi);
+      for (const ParameterSet& n : base.nodes) sets.push_back(n.with(e.key, c.neutral + c.step));
+      cands.push_back(c);
+    }
+    say(fmt::format("signatures: {} effects moved by their physical steps at {} node(s) ({} runs)", cands.size(),
+                    base.nodes.size(), sets.size() * data_.points.size() * static_cast<std::size_t>(data_.model_replicates)));
+    const std::vector<Prediction> moved = ev_.evaluate(sets);
+    terms.clear();
+    for (std::size_t c = 0; c < cands.size(); ++c) {
+      const EffectDef& e = *find_effect(cands[c].effect);
+      EffectTerm t{e.name, e.key, cands[c].neutral, e.lo, e.hi, {}, {}};
+      double chi2 = 0;
+      int dof = 0;
+      for (std::size_t i = 0; i < data_.points.size(); ++i) {
+        std::vector<double> d;  // paired replicate differences over the nodes, per unit of the key
+        for (std::size_t n = 0; n < base.nodes.size(); ++n) {
+          const Prediction& m = moved[c * base.nodes.size() + n];
+          const Prediction& b = base.node_predictions[n];
+          for (std::size_t r = 0; r < b.replicate_fit[i].size(); ++r) {
+            const double x = m.replicate_fit[i][r], y = b.replicate_fit[i][r];
+            if (x == x && y == y) d.push_back((x - y) / cands[c].step);
+          }
+        }
+        const Summary s = summarize(d);
+        t.slope.push_back(d.size() >= 2 ? s.mean : 0.0);
+        t.slope_se.push_back(d.size() >= 2 ? s.se() : 0.0);
+        if (data_.points[i].held_out || d.size() < 2) continue;
+        ++dof;
+        if (s.se() > 0) chi2 += (s.mean / s.se()) * (s.mean / s.se());
+        else if (s.mean != 0) chi2 += 1e6;  // a deterministic shift
+      }
+      cands[c].signature = t.slope;
+      cands[c].visibility_p = dof > 0 ? 1 - chi_square_cdf(chi2, dof) : 1.0;
+      cands[c].visible = cands[c].visibility_p < def_.visible_p;
+      terms.push_back(std::move(t));
+    }
+    return cands;
+  }
+
+  // Score the candidates against the state's residual; X = free parameters + added effects.
+  Round score_round(std::vector<Candidate> cands, const ModelState& state, const Surface& surface) {
+    Round round;
+    const Prediction& at = state.prediction;
+    std::vector<double> r;
+    for (std::size_t i = 0; i < data_.points.size(); ++i)
+      if (!data_.points[i].held_out) r.push_back(state.whitened[i]);
+    const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
+    // X: what the fit already moves: the free parameters and the effects added.
+    Eigen::MatrixXd X(rv.size(), static_cast<Eigen::Index>(surface.keys.size() + surface.effects.size()));
+    Eigen::Index col = 0;
+    for (std::size_t k = 0; k < surface.keys.size(); ++k)
+      X.col(col++) = fitted_whitened(data_, at, surface.derivative(state.params, k));
+    for (const EffectTerm& t : surface.effects) X.col(col++) = fitted_whitened(data_, at, t.slope);
+    std::vector<Eigen::VectorXd> visible_u;
+    std::vector<std::size_t> visible_index;
+    for (std::size_t c = 0; c < cands.size(); ++c) {
+      if (!cands[c].visible) continue;
+      const Eigen::VectorXd u = fitted_whitened(data_, at, cands[c].signature);
+      cands[c].score = score_signature(rv, X, u);
+      visible_u.push_back(u);
+      visible_index.push_back(c);
+    }
+    const double n_tests = static_cast<double>(std::max<std::size_t>(1, visible_index.size()));
+    double best_stat = -1;
+    for (std::size_t c : visible_index) {
+      cands[c].p_adjusted = std::min(1.0, cands[c].score.p * n_tests);
+      if (cands[c].score.statistic > best_stat) best_stat = cands[c].score.statistic, round.best = cands[c].effect;
+    }
+    const auto groups = indistinguishable_groups(visible_u, X, def_.group_cosine);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      for (int m : groups[g]) cands[visible_index[static_cast<std::size_t>(m)]].group = static_cast<int>(g);
+      if (groups[g].size() < 2) continue;
+      std::vector<std::string> names;
+      for (int m : groups[g]) names.push_back(cands[visible_index[static_cast<std::size_t>(m)]].effect);
+      round.groups.push_back(names);
+    }
+    round.candidates = std::move(cands);
+    return round;
+  }
+
+  const Candidate* find(const Round& round, const std::string& name) const {
+    for (const Candidate& c : round.candidates)
+      if (c.effect == name) return &c;
+    return nullptr;
+  }
+
+  std::vector<std::string> group_of(const Round& round, const Candidate& c) const {
+    for (const auto& g : round.groups)
+      if (std::find(g.begin(), g.end(), c.effect) != g.end()) return g;
+    return {c.effect};
+  }
+
+ private:
+  const DataFile& data_;
+  const CalibrationDef& def_;
+  Evaluator& ev_;
+  CalibrationResult& out_;
+};
+
+}  // namespace
+
+CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Evaluator& ev) {
+  const auto start = std::chrono::steady_clock::now();
+  CalibrationResult out;
+  out.data_name = data.name;
+  out.model = to_string(def.model);
+  Loop loop(data, def, ev, out);
+  const int n_free = static_cast<int>(data.free.size());
+
+  // 1. Baseline fit, on the response surface.
+  const BaselineFit base = fit_baseline(data, def, ev, [&](const std::string& s) { loop.say(s); });
+  Surface surface = base.surface;
+  out.before = make_state(data, base.params, surface.predict(base.params, data.scale), n_free);
+  loop.say(fmt::format("baseline {}: chi2/nu = {:.2f} (p = {:.3g}) on {} fitted points; held-out RMS {:.2f} sigma",
+                       base.params.label(), out.before.fitted.chi.per_dof(), out.before.fitted.chi.p,
+                       out.before.fitted.n, out.before.held_out.rms_whitened));
+
+  // 2.-4. Rounds of attribution.
+  std::vector<EffectTerm> terms;
+  std::vector<Candidate> cands = loop.signatures(base, terms);
+  ModelState state = out.before;
+  for (int round_no = 0; round_no < def.max_effects; ++round_no) {
+    Round round = loop.score_round(cands, state, surface);
+    const Candidate* best = round.best.empty() ? nullptr : loop.find(round, round.best);
+    const bool residual_ok = state.fitted.chi.p >= def.alpha;
+    if (!best || best->p_adjusted >= def.alpha) {
+      round.decision = residual_ok ? "the residual is consistent with the noise and no effect's score is significant"
+                                   : (best ? fmt::format("no effect's score is significant (best {}: adjusted p = {:.3g}) "
+                                                         "although the residual is not consistent with the noise",
+                                                         best->effect, best->p_adjusted)
+                                           : "no catalogue effect is visible in this design");
+      loop.say(round.decision);
+      out.rounds.push_back(std::move(round));
+      break;
+    }
+    const std::vector<std::string> group = loop.group_of(round, *best);
+    const EffectDef& e = *find_effect(best->effect);
+    Surface trial = surface;
+    for (const EffectTerm& t : terms)
+      if (t.effect == e.name) trial.effects.push_back(t);
+    const ParameterSet start_at = state.params.with(e.key, std::clamp(best->neutral + best->score.estimate, e.lo, e.hi));
+    const ParameterSet fitted = fit_surface(data, trial, start_at);
+    const int k_after = n_free + static_cast<int>(trial.effects.size());
+    ModelState after = make_state(data, fitted, trial.predict(fitted, data.scale), k_after);
+    const ProfileInterval interval = profile_interval(data, trial, fitted, trial.effects.size() - 1, k_after);
+    const bool bic_better = after.bic < state.bic;
+    const bool held_better = after.held_out.n == 0 || after.held_out.chi.chi2 < state.held_out.chi.chi2;
+    if (!bic_better || !held_better) {
+      round.decision = fmt::format("best candidate {} (adjusted p = {:.3g}) rejected: BIC {:.1f} -> {:.1f}, held-out "
+                                   "chi2 {:.1f} -> {:.1f}",
+                                   best->effect, best->p_adjusted, state.bic, after.bic, state.held_out.chi.chi2,
+                                   after.held_out.chi.chi2);
+      loop.say(round.decision);
+      out.rounds.push_back(std::move(round));
+      break;
+    }
+    AddedEffect added{e.name, e.key, group, best->neutral, fitted.get(e.key, best->neutral),
+                      interval.lo, interval.hi, interval.bounded_lo && interval.bounded_hi};
+    round.decision = fmt::format("added {}{} = {:.4g} {} [{:.4g}, {:.4g}] (adjusted p = {:.3g}); BIC {:.1f} -> {:.1f}",
+                                 e.name, group.size() > 1 ? fmt::format(" (for the group {})", fmt::join(group, ", ")) : "",
+                                 added.value, e.unit, added.lo95, added.hi95, best->p_adjusted, state.bic, after.bic);
+    loop.say(round.decision);
+    out.rounds.push_back(std::move(round));
+    out.effects.push_back(added);
+    cands.erase(std::remove_if(cands.begin(), cands.end(), [&](const Candidate& c) { return c.effect == e.name; }),
+                cands.end());
+    surface = trial;
+    state = after;
+  }
+  out.after = state;
+
+  // Fresh seeds: the fitted parameters before and after, simulated directly on other runs.
+  const std::vector<Prediction> fresh =
+      ev.evaluate({out.before.params, out.after.params}, data.seed + def.fresh_seed_offset, data.model_replicates);
+  out.before.fitted_fresh = measure(data, fresh[0], false, n_free);
+  out.before.held_out_fresh = measure(data, fresh[0], true, n_free);
+  const int k_final = n_free + static_cast<int>(out.effects.size());
+  out.after.fitted_fresh = measure(data, fresh[1], false, k_final);
+  out.after.held_out_fresh = measure(data, fresh[1], true, k_final);
+  out.before.simulated_fresh = fresh[0];
+  out.after.simulated_fresh = fresh[1];
+
+  out.poor_fit = out.after.fitted.chi.p < 0.01;
+  if (out.effects.empty())
+    out.verdict = out.before.fitted.chi.p >= def.alpha ? "consistent with noise" : "unexplained residual";
+  else
+    out.verdict = out.poor_fit ? "effect found, poor fit remains" : "effect found";
+  out.runs_simulated = ev.runs_simulated();
+  out.runs_reused = ev.runs_reused();
+  out.run_seconds = ev.run_seconds();
+  out.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace gapflow

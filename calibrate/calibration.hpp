@@ -1,0 +1,106 @@
+// The calibration loop: fit the declared free parameters to measured data, find
+// the residual, trace it to an effect of the catalogue (or say that none explains
+// it), add the effect, and report the error before and after.
+//
+//   1. baseline fit of the free parameters (weighted least squares on the fit
+//      scale, common random numbers): a grid with a quadratic refinement for one
+//      parameter, NLopt's BOBYQA for two or three;
+//   2. error before: RMSE, RMS of the whitened residual, chi^2/nu and p, fitted and
+//      held-out points apart; the fitted point re-scored on fresh seeds;
+//   3. signatures: every applicable catalogue effect moved by its physical step
+//      (same seeds), whitened, the fitted parameters' sensitivities projected out;
+//      an effect whose step does not move the model beyond its noise is "not
+//      visible in this design"; a score test for each visible one (Bonferroni over
+//      the candidates); signatures with |cos| > 0.9 form a group, never a pick;
+//   4. the best candidate (if significant) is fitted jointly with the free
+//      parameters (BOBYQA), its size given with a profile interval, and kept only
+//      if BIC and the held-out chi^2 both improve; a second round may add one more;
+//   5. stop when the residual is consistent with the noise, or say "unexplained
+//      residual" when it is not and no candidate helps.
+#pragma once
+
+#include "calibrate/attribution.hpp"
+#include "calibrate/data_file.hpp"
+#include "calibrate/evaluator.hpp"
+
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+struct CalibrationDef {
+  ModelKind model = ModelKind::box2d;
+  double alpha = 0.05;             // significance of the score tests (family-wise, Bonferroni) and of chi^2
+  double group_cosine = 0.9;       // |cos| above which two signatures are one group
+  double visible_p = 0.01;         // a signature must move the model beyond its noise at this level
+  int max_effects = 2;             // rounds of "add an effect"
+  int grid_max = 9;                // grid nodes of a one-parameter baseline fit
+  int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)
+  std::uint64_t fresh_seed_offset = 7919;  // run.seed offset of the fresh-seed re-score
+};
+
+// How far the model is from the data on one subset of points.
+struct ErrorMeasures {
+  int n = 0;
+  double rmse = 0;          // on the fit scale (log: ~relative error)
+  double rms_whitened = 0;  // RMS of residual / total se: 1 = at the noise floor
+  ChiSquare chi;            // dof = n - fitted parameters (fitted points) or n (held-out)
+  int invalid = 0;          // points where the model gave no value (counted as 10 sigma)
+};
+
+struct ModelState {
+  ParameterSet params;         // free parameters and added effects
+  Prediction prediction;
+  std::vector<double> whitened;  // (data - model)/sigma on the fit scale, every point
+  ErrorMeasures fitted, held_out;
+  ErrorMeasures fitted_fresh, held_out_fresh;  // the same parameters simulated directly on fresh seeds
+  Prediction simulated_fresh;
+  double bic = 0;
+};
+
+struct EffectDef;
+
+struct Candidate {
+  std::string effect;          // catalogue name
+  std::string key;
+  double neutral = 0;          // the template's value
+  double step = 0;             // the step used (key units)
+  bool visible = false;        // the step moved the model beyond its noise (p < visible_p)
+  double visibility_p = 1;
+  std::vector<double> signature;  // d(fit)/d(key) per point
+  Score score;                 // against the residual of the round
+  double p_adjusted = 1;       // Bonferroni over the visible candidates
+  int group = -1;              // index into the round's groups
+};
+
+struct Round {
+  std::vector<Candidate> candidates;
+  std::vector<std::vector<std::string>> groups;  // effects the design cannot tell apart (size > 1 only)
+  std::string best;              // best-scoring visible candidate ("" if none)
+  std::string decision;          // what the round concluded, one sentence
+};
+
+struct AddedEffect {
+  std::string effect, key;
+  std::vector<std::string> group;  // the indistinguishable group it stands for (itself if alone)
+  double neutral = 0, value = 0;   // key units
+  double lo95 = 0, hi95 = 0;       // profile interval of value
+  bool interval_bounded = true;
+};
+
+struct CalibrationResult {
+  std::string data_name, model;
+  ModelState before, after;       // prediction = the response surface (calibrate/fit.hpp) at params
+  std::vector<Round> rounds;
+  std::vector<AddedEffect> effects;
+  std::string verdict;             // "consistent with noise" | "effect found" | "unexplained residual" | ...
+  std::string summary;             // one paragraph for people
+  bool poor_fit = false;           // chi^2 p < 0.01 after everything
+  int runs_simulated = 0, runs_reused = 0;
+  double run_seconds = 0, wall_seconds = 0;
+  std::vector<std::string> log;    // every decision in order
+};
+
+CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Evaluator& evaluator);
+
+}  // namespace gapflow

@@ -1,0 +1,179 @@
+#include "calibrate/calibration_report.hpp"
+
+#include "calibrate/effect_catalogue.hpp"
+#include "calibrate/fit.hpp"
+#include "common/text_file.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <iostream>
+#include <ostream>
+
+#ifndef GAPFLOW_CALIBRATION_PLOT_SCRIPT
+#define GAPFLOW_CALIBRATION_PLOT_SCRIPT "calibrate/plot_calibration.py"
+#endif
+
+namespace gapflow {
+
+namespace {
+
+std::string json_string(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (c == '\n') {
+      o += "\\n";
+      continue;
+    }
+    o += c;
+  }
+  return o + "\"";
+}
+
+std::string json_number(double v) { return std::isfinite(v) ? fmt::format("{}", v) : "null"; }
+
+std::string json_errors(const ErrorMeasures& e) {
+  return fmt::format(R"({{"n": {}, "rmse": {}, "rms_whitened": {}, "chi2": {}, "dof": {}, "p": {}, "invalid": {}}})", e.n,
+                     json_number(e.rmse), json_number(e.rms_whitened), json_number(e.chi.chi2), e.chi.dof,
+                     json_number(e.chi.p), e.invalid);
+}
+
+std::string json_params(const ParameterSet& p) {
+  std::string s;
+  for (const auto& [k, v] : p.values) s += fmt::format("{}{}: {}", s.empty() ? "" : ", ", json_string(k), json_number(v));
+  return "{" + s + "}";
+}
+
+std::string json_state(const ModelState& s) {
+  return fmt::format(R"({{"params": {}, "fitted": {}, "held_out": {}, "fitted_fresh": {}, "held_out_fresh": {}, "bic": {}}})",
+                     json_params(s.params), json_errors(s.fitted), json_errors(s.held_out), json_errors(s.fitted_fresh),
+                     json_errors(s.held_out_fresh), json_number(s.bic));
+}
+
+std::string json_list(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + json_string(x);
+  return "[" + s + "]";
+}
+
+void write_summary_json(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
+  o << "{\n";
+  o << fmt::format("  \"data\": {},\n  \"data_file\": {},\n  \"model\": {},\n  \"observable\": {},\n", json_string(r.data_name),
+                   json_string(data.file.string()), json_string(r.model), json_string(to_string(data.observable)));
+  o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n", json_string(r.verdict), r.poor_fit ? "true" : "false");
+  o << "  \"effects\": [";
+  for (std::size_t i = 0; i < r.effects.size(); ++i) {
+    const AddedEffect& e = r.effects[i];
+    o << fmt::format(R"({}{{"effect": {}, "key": {}, "group": {}, "neutral": {}, "value": {}, "lo95": {}, "hi95": {}, "interval_bounded": {}}})",
+                     i ? ", " : "", json_string(e.effect), json_string(e.key), json_list(e.group), json_number(e.neutral),
+                     json_number(e.value), json_number(e.lo95), json_number(e.hi95), e.interval_bounded ? "true" : "false");
+  }
+  o << "],\n";
+  o << "  \"before\": " << json_state(r.before) << ",\n";
+  o << "  \"after\": " << json_state(r.after) << ",\n";
+  o << "  \"rounds\": [";
+  for (std::size_t i = 0; i < r.rounds.size(); ++i) {
+    const Round& rd = r.rounds[i];
+    std::string groups;
+    for (const auto& g : rd.groups) groups += (groups.empty() ? "" : ", ") + json_list(g);
+    o << fmt::format("{}\n    {{\"best\": {}, \"decision\": {}, \"groups\": [{}], \"candidates\": [", i ? "," : "",
+                     json_string(rd.best), json_string(rd.decision), groups);
+    for (std::size_t c = 0; c < rd.candidates.size(); ++c) {
+      const Candidate& k = rd.candidates[c];
+      o << fmt::format(R"({}{{"effect": {}, "step": {}, "visible": {}, "visibility_p": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "group": {}}})",
+                       c ? ", " : "", json_string(k.effect), json_number(k.step), k.visible ? "true" : "false",
+                       json_number(k.visibility_p), json_number(k.score.statistic), json_number(k.score.p),
+                       json_number(k.p_adjusted), json_number(k.score.estimate), k.group);
+    }
+    o << "]}";
+  }
+  o << "\n  ],\n";
+  o << fmt::format("  \"runs_simulated\": {},\n  \"runs_reused\": {},\n  \"run_seconds\": {},\n  \"wall_seconds\": {}\n}}\n",
+                   r.runs_simulated, r.runs_reused, json_number(r.run_seconds), json_number(r.wall_seconds));
+}
+
+void write_points_csv(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
+  for (const DesignColumn& c : data.design) o << c.column << ",";
+  o << "held_out,value,se,before,before_se,after,after_se,residual_before,residual_after\n";
+  const Prediction& b = r.before.prediction;
+  const Prediction& a = r.after.prediction;
+  auto model_value = [&](const Prediction& p, std::size_t i) { return p.valid[i] ? fmt::format("{}", p.value[i]) : ""; };
+  auto model_se = [&](const Prediction& p, std::size_t i) {
+    // Back to the observable's unit (log scale: se_fit is relative).
+    if (!p.valid[i]) return std::string();
+    return fmt::format("{}", data.scale == FitScale::log ? p.se_fit[i] * p.value[i] : p.se_fit[i]);
+  };
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    for (const std::string& v : data.points[i].design) o << (v.front() == '"' ? v.substr(1, v.size() - 2) : v) << ",";
+    o << fmt::format("{},{},{},{},{},{},{},{},{}\n", data.points[i].held_out ? 1 : 0, data.points[i].value,
+                     data.points[i].se, model_value(b, i), model_se(b, i), model_value(a, i), model_se(a, i),
+                     r.before.whitened[i], r.after.whitened[i]);
+  }
+}
+
+std::string errors_row(const char* what, const ErrorMeasures& e) {
+  if (e.n == 0) return fmt::format("| {} | 0 | | | | |\n", what);
+  return fmt::format("| {} | {} | {:.4f} | {:.2f} | {:.2f} / {} = {:.2f} | {:.3g} |\n", what, e.n, e.rmse, e.rms_whitened,
+                     e.chi.chi2, e.chi.dof, e.chi.per_dof(), e.chi.p);
+}
+
+void write_report_md(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
+  o << fmt::format("# Calibration: {} against the {} model\n\n", r.data_name, r.model);
+  o << fmt::format("Data: `{}` ({} points, {} held out), observable `{}` on a {} scale. Source: {} ({}). {}\n\n",
+                   data.file.string(), data.points.size(), data.points.size() - data.fitted_count(),
+                   to_string(data.observable), data.scale == FitScale::log ? "log" : "linear", data.source.citation,
+                   data.source.method, data.source.uncertainty);
+  o << fmt::format("**Verdict: {}.**", r.verdict);
+  for (const AddedEffect& e : r.effects) {
+    const EffectDef* d = find_effect(e.effect);
+    o << fmt::format(" Added `{}` = {:.4g} {} (95 % {} interval [{:.4g}, {:.4g}]; without it {:.4g}){}.", e.key, e.value,
+                     d ? d->unit : "", e.interval_bounded ? "profile" : "linearised", e.lo95, e.hi95, e.neutral,
+                     e.group.size() > 1 ? fmt::format(", standing for the group {{{}}} that this design cannot tell apart", fmt::join(e.group, ", ")) : "");
+  }
+  if (r.poor_fit) o << " The fit is still poor after the additions (chi2 p < 0.01): read any attribution with care.";
+  o << "\n\n## Error before and after\n\nRMSE on the fit scale (log scale: about a relative error); RMS of the whitened residual (1 = at the noise floor); chi2/nu with its p-value (fitted points: nu = n - fitted parameters; held-out points: nu = n).\n\n";
+  o << "| points | n | RMSE | RMS/noise | chi2 / nu | p |\n|---|---|---|---|---|---|\n";
+  o << errors_row("before, fitted", r.before.fitted) << errors_row("before, held out", r.before.held_out);
+  o << errors_row("before, fitted, fresh seeds", r.before.fitted_fresh) << errors_row("before, held out, fresh seeds", r.before.held_out_fresh);
+  o << errors_row("after, fitted", r.after.fitted) << errors_row("after, held out", r.after.held_out);
+  o << errors_row("after, fitted, fresh seeds", r.after.fitted_fresh) << errors_row("after, held out, fresh seeds", r.after.held_out_fresh);
+  o << fmt::format("\nParameters before: {}. After: {}. BIC {:.2f} -> {:.2f}.\n", r.before.params.label(), r.after.params.label(),
+                   r.before.bic, r.after.bic);
+  o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates.\n";
+  for (std::size_t i = 0; i < r.rounds.size(); ++i) {
+    const Round& rd = r.rounds[i];
+    o << fmt::format("\n### Round {}\n\n| effect | step | visible (p) | score | p | adjusted p | linearised size | group |\n|---|---|---|---|---|---|---|---|\n", i + 1);
+    for (const Candidate& c : rd.candidates)
+      o << fmt::format("| {} | {:.3g} | {} ({:.2g}) | {} | {} | {} | {} | {} |\n", c.effect, c.step, c.visible ? "yes" : "no",
+                       c.visibility_p, c.visible ? fmt::format("{:.2f}", c.score.statistic) : "",
+                       c.visible ? fmt::format("{:.3g}", c.score.p) : "", c.visible ? fmt::format("{:.3g}", c.p_adjusted) : "",
+                       c.visible ? fmt::format("{:.4g} ± {:.2g}", c.neutral + c.score.estimate, c.score.se) : "",
+                       c.group >= 0 ? std::to_string(c.group) : "");
+    for (const auto& g : rd.groups) o << fmt::format("\nIndistinguishable in this design (|cos| > 0.9): {}.\n", fmt::join(g, ", "));
+    o << fmt::format("\nDecision: {}.\n", rd.decision);
+  }
+  o << "\n## Log\n\n```\n";
+  for (const std::string& l : r.log) o << l << "\n";
+  o << "```\n";
+  o << fmt::format("\nCost: {} runs simulated, {} reused from the store; {:.0f} s of runs (about CPU seconds), {:.0f} s wall.\n",
+                   r.runs_simulated, r.runs_reused, r.run_seconds, r.wall_seconds);
+  o << "\nFigures: `data_vs_model.png` (data and model before/after with error bars against each design column), `residuals.png`, `candidate_scores.png`.\n";
+}
+
+}  // namespace
+
+void write_calibration_outputs(const DataFile& data, const CalibrationResult& result, const std::filesystem::path& dir,
+                               bool plots) {
+  std::filesystem::create_directories(dir);
+  write_file_atomically(dir / "summary.json", [&](std::ostream& o) { write_summary_json(o, data, result); });
+  write_file_atomically(dir / "points.csv", [&](std::ostream& o) { write_points_csv(o, data, result); });
+  write_file_atomically(dir / "report.md", [&](std::ostream& o) { write_report_md(o, data, result); });
+  if (!plots) return;
+  const char* env = std::getenv("GAPFLOW_CALIBRATION_PLOT_SCRIPT");
+  const std::string script = env ? env : GAPFLOW_CALIBRATION_PLOT_SCRIPT;
+  const std::string cmd = fmt::format("/usr/bin/python3 '{}' '{}'", script, dir.string());
+  if (std::system(cmd.c_str()) != 0) std::cerr << "calibrate: plots were not drawn (" << cmd << " failed)\n";
+}
+
+}  // namespace gapflow

@@ -1,0 +1,109 @@
+// Measured-data files: a table of measurements and what to compare it with.
+//
+// Strict TOML like scenarios and studies (unknown keys, bad values and missing
+// columns are ScenarioErrors at file:line:column). A data file keeps apart, as
+// MercuryDPM's calibration drivers do, what is fixed (the scenario template and
+// its overrides), what is free (parameters with ranges) and what was measured
+// (the points). It never names effects: what a model misses is for
+// `gapflow calibrate` to find.
+//
+//   [data]        name, description
+//   [source]      citation, method (measured | digitized | simulated), uncertainty (notes)
+//   [model]       scenario (relative to this file), set ["key=value", ...], replicates, seed
+//   [observable]  kind, scale, uncertainty (se | ci95), floor_relative
+//   [[design]]    column, key, unit (d | lab)
+//   [[free]]      key, lo, hi, step
+//   [points]      csv = "file.csv" (relative to this file)   -- or --   [[point]] rows
+// Each point: one value per design column, value, uncertainty, replicates, held_out.
+#pragma once
+
+#include "common/scenario_loader.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace gapflow {
+
+// What was measured at each point. Rates are particles/s; <s> is particles.
+enum class ObservableKind {
+  j_paper,         // N / time for all to pass
+  j_mid,           // rate between the 10 % and 90 % crossings
+  j_flowing,       // rate while flowing (clogs removed)
+  j_star,          // J_paper sqrt(d/g), g = 9.81 m/s^2
+  mean_avalanche,  // <s>, censoring-aware mean avalanche size (first avalanches dropped)
+  ln_s_plus_1,     // ln(<s> + 1)
+  clog_share       // share of runs with at least one clog
+};
+const char* to_string(ObservableKind k);
+
+// The scale on which residuals are formed: log makes the noise of rates and
+// sizes roughly even (a relative error); linear for quantities already on it.
+enum class FitScale { log, linear };
+
+struct DataSource {
+  std::string citation;     // where the numbers come from
+  std::string method;       // measured | digitized | simulated
+  std::string uncertainty;  // how the uncertainties were obtained, caveats
+};
+
+// A design column: its values set one scenario key at every point.
+struct DesignColumn {
+  std::string column;         // name in the points table ("W_over_d")
+  std::string key;            // scenario key ("bottleneck.gap_mm")
+  bool in_diameters = false;  // unit "d": value x nominal diameter (mm); "lab": the key's own unit
+  SourceLocation where;
+};
+
+// A parameter the baseline fit may move, within [lo, hi] (key units).
+struct FreeParameter {
+  std::string key;   // scenario key ("particles.friction_particle")
+  double lo = 0, hi = 0;
+  double step = 0;   // physical step: grid spacing and finite-difference step (key units)
+  SourceLocation where;
+};
+
+struct DataPoint {
+  std::vector<std::string> design;  // one TOML literal per design column ("4.5", "\"V\"")
+  double value = 0;                 // observable, in its unit
+  double se = 0;                    // standard error of value (from the file's uncertainty, floor applied)
+  int replicates = 1;               // runs or experiments behind the value
+  bool held_out = false;            // not used in any fit; scored separately
+  SourceLocation where;
+};
+
+struct DataFile {
+  std::filesystem::path file;
+  std::string name;
+  std::string description;
+  DataSource source;
+  std::filesystem::path scenario;        // template, resolved against the data file's folder
+  std::vector<std::string> set;          // fixed overrides
+  int model_replicates = 4;              // model runs per point and parameter value (common random numbers)
+  std::uint64_t seed = 1;                // run.seed of the model runs
+  ObservableKind observable = ObservableKind::j_paper;
+  FitScale scale = FitScale::log;
+  double floor_relative = 0;             // relative SE floor added in quadrature
+  std::vector<DesignColumn> design;
+  std::vector<FreeParameter> free;
+  std::vector<DataPoint> points;
+
+  // The overrides that make point i (fixed set, then design values), in scenario units.
+  std::vector<std::string> point_overrides(std::size_t i) const;
+  // The template with point i's overrides and `extra` after them, loaded and validated.
+  LoadedScenario point_scenario(std::size_t i, const std::vector<std::string>& extra = {}) const;
+  // A short label of point i ("W_over_d=4.5, shape=V").
+  std::string point_label(std::size_t i) const;
+  std::size_t fitted_count() const;
+};
+
+DataFile load_data_file(const std::filesystem::path& file);
+// From text (tests). Paths inside resolve against base_dir.
+DataFile parse_data_file(std::string_view text, std::string_view source_name, const std::filesystem::path& base_dir);
+
+// The observable's default fit scale (log for rates and sizes).
+FitScale default_scale(ObservableKind k);
+
+}  // namespace gapflow

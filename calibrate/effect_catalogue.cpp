@@ -1,0 +1,64 @@
+#include "calibrate/effect_catalogue.hpp"
+
+#include "common/scenario_loader.hpp"
+
+#include <toml++/toml.h>
+
+namespace gapflow {
+
+const std::vector<EffectDef>& effect_catalogue() {
+  // Ranges: what a real board and real beads could plausibly have (rolling
+  // resistance: hard balls on smooth steel 1e-5 - 1e-3, a rough or coated board
+  // more; the top of the range is a felt-like board). Steps: about half the
+  // range, so that a finite difference at 4-8 replicates beats the noise and a
+  // size anywhere in the range is at most ~2 steps from the neutral value.
+  static const std::vector<EffectDef> catalogue{
+      {"rolling_resistance", "particles.rolling_resistance", "",
+       "resistance from the board, a force mu_r m g cos(theta) against the velocity", 0.0, 0.02, 0.01},
+      {"spinning_friction", "particles.spinning_friction_mm", "mm",
+       "torsional friction about the board normal, torque s m g cos(theta)", 0.0, 1.0, 0.5},
+      {"wall_friction", "particles.friction_wall", "",
+       "Coulomb friction against walls and obstruction different from particle-particle friction", 0.05, 0.8,
+       0.3},
+      {"size_scatter", "particles.size_scatter", "", "relative half-width of the particle size distribution",
+       0.0, 0.2, 0.1},
+      {"restitution", "particles.restitution", "", "pair coefficient of restitution", 0.0, 0.95, -0.4},
+      {"lateral_tilt", "plane.lateral_tilt_deg", "deg",
+       "the board rolled about its fall line: gravity g cos(theta) sin(phi) across the channel", 0.0, 6.0, 4.0},
+      {"gap_offset", "bottleneck.gap_offset_mm", "mm",
+       "the wall tips stand further apart than drawn (effective gap W + delta)", -3.0, 3.0, 1.5},
+      {"linear_drag", "particles.drag_per_s", "1/s",
+       "viscous drag -gamma m v on each particle (air, a film on the board)", 0.0, 6.0, 2.0},
+      {"corner_rounding", "obstruction.corner_radius_mm", "mm",
+       "the obstruction's corners rounded to radius r (faces stay in place)", 0.0, 3.0, 2.0, true, true, true},
+  };
+  return catalogue;
+}
+
+const EffectDef* find_effect(const std::string& name) {
+  for (const EffectDef& e : effect_catalogue())
+    if (e.name == name) return &e;
+  return nullptr;
+}
+
+bool effect_applies(const EffectDef& effect, ModelKind model, const DataFile& data) {
+  if (model == ModelKind::box2d ? !effect.in_2d : !effect.in_3d) return false;
+  for (const FreeParameter& f : data.free)
+    if (f.key == effect.key) return false;
+  if (!effect.needs_polygon_obstruction) return true;
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    const ScenarioDef def = data.point_scenario(i).def;
+    if (def.obstruction.shape == ObstructionShape::triangle || def.obstruction.shape == ObstructionShape::polygon)
+      return true;
+  }
+  return false;
+}
+
+double neutral_value(const EffectDef& effect, const DataFile& data) {
+  // The canonical TOML of the resolved template holds every key that is set; keys
+  // written only when set (the effects' switches) are absent at their default, 0.
+  const toml::table doc = toml::parse(canonical_toml(data.point_scenario(0).def));
+  return toml::at_path(doc, effect.key).value<double>().value_or(0.0);
+}
+
+}  // namespace gapflow

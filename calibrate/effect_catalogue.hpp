@@ -1,0 +1,43 @@
+// The effect catalogue: the physical effects the calibration loop can look for
+// when a model misses measured data. One list (effect_catalogue()); adding an
+// effect is adding an entry. Every entry is a real scenario key of the models it
+// applies to, tested on its own (tests/test_sim2d.cpp, tests/test_sim3d.cpp,
+// tests/test_effects.cpp), with a plausible size range and a physical step: the
+// finite difference that measures the effect's signature must be large enough to
+// beat the simulation noise at the replicate counts a calibration uses.
+#pragma once
+
+#include "calibrate/data_file.hpp"
+#include "models/registry.hpp"
+
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+struct EffectDef {
+  std::string name;       // short identifier used in reports ("rolling_resistance")
+  std::string key;        // scenario key that switches it on ("particles.rolling_resistance")
+  std::string unit;       // unit of the key's value ("", "mm", "deg", "1/s")
+  std::string physics;    // one line: what it is
+  double lo = 0, hi = 0;  // plausible range of the key's value (lab units)
+  double step = 0;        // physical step for the signature (key units; sign = direction)
+  bool in_2d = true;      // the 2D model has it
+  bool in_3d = true;      // the 3D model has it
+  bool needs_polygon_obstruction = false;  // only visible when some design point has a triangle/polygon obstruction
+};
+
+// The catalogue, in a fixed order.
+const std::vector<EffectDef>& effect_catalogue();
+// nullptr when no effect has this name.
+const EffectDef* find_effect(const std::string& name);
+
+// Whether `effect` can show in this model and design (a corner radius needs a
+// polygonal obstruction somewhere; a free parameter of the data file is no effect).
+bool effect_applies(const EffectDef& effect, ModelKind model, const DataFile& data);
+
+// The value the data file's template (with its fixed overrides) gives the effect's
+// key: the model "without the effect".
+double neutral_value(const EffectDef& effect, const DataFile& data);
+
+}  // namespace gapflow

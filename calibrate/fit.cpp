@@ -1,0 +1,287 @@
+#include "calibrate/fit.hpp"
+
+#include <fmt/format.h>
+#include <nlopt.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace gapflow {
+
+double data_fit_value(const DataFile& data, std::size_t i) { return to_fit_scale(data.scale, data.points[i].value); }
+
+double total_sigma(const DataFile& data, const Prediction& p, std::size_t i) {
+  const DataPoint& d = data.points[i];
+  const double se_data = data.scale == FitScale::log ? d.se / d.value : d.se;
+  return std::hypot(se_data, p.se_fit[i]);
+}
+
+double chi2_of(const DataFile& data, const Prediction& p, bool held_out) {
+  double chi2 = 0;
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    if (data.points[i].held_out != held_out) continue;
+    const double w = p.valid[i] ? (data_fit_value(data, i) - p.fit[i]) / total_sigma(data, p, i) : 10.0;
+    chi2 += w * w;
+  }
+  return chi2;
+}
+
+namespace {
+
+// Quadratic basis in the scaled coordinates: 1, x_k, x_k x_l (k <= l).
+Eigen::VectorXd basis(const std::vector<double>& x, bool quadratic) {
+  const std::size_t k = x.size();
+  std::vector<double> b{1.0};
+  for (double v : x) b.push_back(v);
+  if (quadratic)
+    for (std::size_t i = 0; i < k; ++i)
+      for (std::size_t j = i; j < k; ++j) b.push_back(x[i] * x[j]);
+  return Eigen::Map<Eigen::VectorXd>(b.data(), static_cast<Eigen::Index>(b.size()));
+}
+
+std::vector<double> scaled(const Surface& s, const ParameterSet& p) {
+  std::vector<double> x;
+  for (std::size_t k = 0; k < s.keys.size(); ++k) x.push_back((p.get(s.keys[k], s.centre[k]) - s.centre[k]) / s.half[k]);
+  return x;
+}
+
+// Weighted least squares of one point's fit-scale values over the nodes. Adds the
+// weighted lack of fit and its degrees of freedom to the running sums (pooled over
+// the points, since 5 nodes give one point too few to judge its own curve).
+void regress_point(Surface& s, const std::vector<std::vector<double>>& xs, const std::vector<double>& y,
+                   const std::vector<double>& se, double& lack_sum, double& lack_dof) {
+  const std::size_t n = y.size();
+  const std::size_t p_quad = basis(xs.front(), true).size();
+  const bool quadratic = n > p_quad;  // a quadratic needs more nodes than coefficients
+  const Eigen::Index p = basis(xs.front(), quadratic).size();
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(n), p);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(n));
+  for (std::size_t r = 0; r < n; ++r) {
+    const double w = 1 / std::max(se[r], 1e-9);
+    A.row(static_cast<Eigen::Index>(r)) = w * basis(xs[r], quadratic).transpose();
+    b(static_cast<Eigen::Index>(r)) = w * y[r];
+  }
+  const Eigen::MatrixXd AtA = A.transpose() * A;
+  Eigen::VectorXd coef = AtA.ldlt().solve(A.transpose() * b);
+  Eigen::MatrixXd cov = AtA.inverse();
+  if (static_cast<Eigen::Index>(n) > p) {
+    lack_sum += (A * coef - b).squaredNorm();
+    lack_dof += static_cast<double>(static_cast<Eigen::Index>(n) - p);
+  }
+  if (!quadratic) {  // pad to the quadratic layout with zeros
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p_quad));
+    Eigen::MatrixXd v = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(p_quad), static_cast<Eigen::Index>(p_quad));
+    c.head(p) = coef;
+    v.topLeftCorner(p, p) = cov;
+    coef = c, cov = v;
+  }
+  s.coef.push_back(coef);
+  s.cov.push_back(cov);
+}
+
+Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nodes, const std::vector<Prediction>& preds) {
+  Surface s;
+  for (const FreeParameter& f : data.free) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const ParameterSet& n : nodes) lo = std::min(lo, n.get(f.key, 0)), hi = std::max(hi, n.get(f.key, 0));
+    s.keys.push_back(f.key);
+    s.lo.push_back(lo), s.hi.push_back(hi);
+    s.centre.push_back((lo + hi) / 2);
+    s.half.push_back(std::max((hi - lo) / 2, 1e-12));
+  }
+  double lack_sum = 0, lack_dof = 0;
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    std::vector<std::vector<double>> xs;
+    std::vector<double> y, se;
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+      if (!preds[n].valid[i]) continue;
+      xs.push_back(scaled(s, nodes[n]));
+      y.push_back(preds[n].fit[i]);
+      se.push_back(preds[n].se_fit[i]);
+    }
+    s.valid.push_back(!xs.empty() && xs.size() * 2 >= nodes.size());
+    if (xs.empty()) xs.push_back(scaled(s, nodes.front())), y.push_back(0), se.push_back(1);
+    regress_point(s, xs, y, se, lack_sum, lack_dof);
+  }
+  // Where the quadratic does not follow the nodes within their noise, widen every
+  // point's uncertainty by the pooled lack of fit.
+  if (lack_dof > 0)
+    for (Eigen::MatrixXd& c : s.cov) c *= std::max(1.0, lack_sum / lack_dof);
+  return s;
+}
+
+struct Var {
+  std::string key;
+  double lo, hi;
+};
+
+std::vector<Var> variables(const Surface& s, const std::string& fixed) {
+  std::vector<Var> v;
+  for (std::size_t k = 0; k < s.keys.size(); ++k)
+    if (s.keys[k] != fixed) v.push_back({s.keys[k], s.lo[k], s.hi[k]});
+  for (const EffectTerm& e : s.effects)
+    if (e.key != fixed) v.push_back({e.key, e.lo, e.hi});
+  return v;
+}
+
+}  // namespace
+
+Prediction Surface::predict(const ParameterSet& params, FitScale scale) const {
+  Prediction p;
+  const Eigen::VectorXd b = basis(scaled(*this, params), true);
+  for (std::size_t i = 0; i < coef.size(); ++i) {
+    double f = b.dot(coef[i]);
+    double var = b.dot(cov[i] * b);
+    for (const EffectTerm& e : effects) {
+      const double da = params.get(e.key, e.neutral) - e.neutral;
+      f += e.slope[i] * da;
+      var += (e.slope_se[i] * da) * (e.slope_se[i] * da);
+    }
+    p.fit.push_back(f);
+    p.se_fit.push_back(std::sqrt(std::max(var, 0.0)));
+    p.value.push_back(from_fit_scale(scale, f));
+    p.valid.push_back(valid[i]);
+    p.replicate_fit.emplace_back();
+  }
+  return p;
+}
+
+std::vector<double> Surface::derivative(const ParameterSet& params, std::size_t k) const {
+  const double h = 1e-4 * half[k];
+  const ParameterSet up = params.with(keys[k], params.get(keys[k], centre[k]) + h);
+  const ParameterSet dn = params.with(keys[k], params.get(keys[k], centre[k]) - h);
+  const Prediction a = predict(up, FitScale::linear), b = predict(dn, FitScale::linear);
+  std::vector<double> d;
+  for (std::size_t i = 0; i < coef.size(); ++i) d.push_back((a.fit[i] - b.fit[i]) / (2 * h));
+  return d;
+}
+
+ParameterSet fit_surface(const DataFile& data, const Surface& s, const ParameterSet& start, const std::string& fixed) {
+  const std::vector<Var> vars = variables(s, fixed);
+  if (vars.empty()) return start;
+  const auto n = static_cast<unsigned>(vars.size());
+  // BOBYQA (bounded quadratic models) needs two or more variables; COBYLA does one.
+  nlopt::opt opt(n >= 2 ? nlopt::LN_BOBYQA : nlopt::LN_COBYLA, n);
+  std::vector<double> lo, hi, x, step;
+  for (const Var& v : vars) {
+    lo.push_back(v.lo), hi.push_back(v.hi);
+    x.push_back(std::clamp(start.get(v.key, (v.lo + v.hi) / 2), v.lo, v.hi));
+    step.push_back((v.hi - v.lo) / 8);
+  }
+  opt.set_lower_bounds(lo);
+  opt.set_upper_bounds(hi);
+  opt.set_initial_step(step);
+  opt.set_xtol_rel(1e-7);
+  opt.set_maxeval(4000);
+  struct Ctx {
+    const DataFile* data;
+    const Surface* s;
+    const ParameterSet* start;
+    const std::vector<Var>* vars;
+  } ctx{&data, &s, &start, &vars};
+  auto f = [](const std::vector<double>& xv, std::vector<double>&, void* raw) -> double {
+    const auto& c = *static_cast<Ctx*>(raw);
+    ParameterSet p = *c.start;
+    for (std::size_t k = 0; k < xv.size(); ++k) p = p.with((*c.vars)[k].key, xv[k]);
+    return chi2_of(*c.data, c.s->predict(p, c.data->scale));
+  };
+  opt.set_min_objective(f, &ctx);
+  double value = 0;
+  try {
+    opt.optimize(x, value);
+  } catch (const nlopt::roundoff_limited&) {  // the best point so far stands
+  }
+  ParameterSet out = start;
+  for (std::size_t k = 0; k < vars.size(); ++k) out = out.with(vars[k].key, x[k]);
+  return out;
+}
+
+ProfileInterval profile_interval(const DataFile& data, const Surface& s, const ParameterSet& fitted, std::size_t e,
+                                 int fitted_parameters) {
+  const EffectTerm& t = s.effects[e];
+  constexpr int kSteps = 80;
+  std::vector<double> a, chi2;
+  for (int k = 0; k <= kSteps; ++k) {
+    const double v = t.lo + (t.hi - t.lo) * k / kSteps;
+    const ParameterSet p = fit_surface(data, s, fitted.with(t.key, v), t.key);
+    a.push_back(v);
+    chi2.push_back(chi2_of(data, s.predict(p, data.scale)));
+  }
+  const double at_fit = chi2_of(data, s.predict(fitted, data.scale));
+  const std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
+  const double minimum = std::min(at_fit, chi2[best]);
+  const double nu = std::max(1.0, static_cast<double>(data.fitted_count()) - fitted_parameters);
+  const double limit = minimum + 3.841458820694124 * std::max(1.0, minimum / nu);
+  ProfileInterval out;
+  std::size_t l = best, h = best;
+  while (l > 0 && chi2[l - 1] <= limit) --l;
+  while (h + 1 < chi2.size() && chi2[h + 1] <= limit) ++h;
+  auto crossing = [&](std::size_t in, std::size_t outside) {  // linear interpolation of the limit
+    return a[in] + (a[outside] - a[in]) * (limit - chi2[in]) / (chi2[outside] - chi2[in]);
+  };
+  out.bounded_lo = l > 0;
+  out.bounded_hi = h + 1 < chi2.size();
+  out.lo = out.bounded_lo ? crossing(l, l - 1) : a[l];
+  out.hi = out.bounded_hi ? crossing(h, h + 1) : a[h];
+  return out;
+}
+
+BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const Say& say) {
+  BaselineFit out;
+  // The grid.
+  std::vector<ParameterSet> grid{ParameterSet{}};
+  for (const FreeParameter& f : data.free) {
+    int levels = 3;
+    double h = (f.hi - f.lo) / 2;
+    if (data.free.size() == 1) {
+      levels = static_cast<int>(std::floor((f.hi - f.lo) / f.step + 1e-9)) + 1;
+      h = f.step;
+      if (levels > def.grid_max) levels = def.grid_max, h = (f.hi - f.lo) / (levels - 1);
+    }
+    std::vector<ParameterSet> next;
+    for (const ParameterSet& g : grid)
+      for (int k = 0; k < levels; ++k) next.push_back(g.with(f.key, f.lo + k * h));
+    grid = next;
+  }
+  say(fmt::format("baseline: {} grid node(s) over the free parameters ({} runs)", grid.size(),
+                  grid.size() * data.points.size() * static_cast<std::size_t>(data.model_replicates)));
+  const std::vector<Prediction> preds = ev.evaluate(grid);
+  std::vector<double> chi2;
+  for (const Prediction& p : preds) chi2.push_back(chi2_of(data, p));
+  const auto best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
+  for (std::size_t k = 0; k < grid.size(); ++k)
+    say(fmt::format("  {}: chi2 = {:.2f}{}", grid[k].label(), chi2[k], k == best ? "  <- best node" : ""));
+  // The surface's nodes: one parameter, the 5 consecutive nodes around the best;
+  // two or three, every node (3 levels each: the quadratic's minimum).
+  std::vector<std::size_t> local(grid.size());
+  std::iota(local.begin(), local.end(), 0);
+  if (data.free.size() == 1 && grid.size() > 5) {
+    const std::size_t first = std::min(best >= 2 ? best - 2 : 0, grid.size() - 5);
+    local = {first, first + 1, first + 2, first + 3, first + 4};
+  }
+  std::vector<ParameterSet> nodes;
+  std::vector<Prediction> node_preds;
+  for (std::size_t k : local) nodes.push_back(grid[k]), node_preds.push_back(preds[k]);
+  out.surface = data.free.empty() ? build_surface(data, {ParameterSet{}}, {preds.front()}) : build_surface(data, nodes, node_preds);
+  out.params = fit_surface(data, out.surface, grid[best]);
+  // Signatures are taken at the (up to) three nodes nearest the fit.
+  std::vector<std::size_t> order(nodes.size());
+  std::iota(order.begin(), order.end(), 0);
+  auto distance = [&](const ParameterSet& n) {
+    double d = 0;
+    for (std::size_t k = 0; k < out.surface.keys.size(); ++k) {
+      const double z = (n.get(out.surface.keys[k], 0) - out.params.get(out.surface.keys[k], 0)) / out.surface.half[k];
+      d += z * z;
+    }
+    return d;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return distance(nodes[a]) < distance(nodes[b]); });
+  for (std::size_t k = 0; k < std::min<std::size_t>(3, order.size()); ++k)
+    out.nodes.push_back(nodes[order[k]]), out.node_predictions.push_back(node_preds[order[k]]);
+  say(fmt::format("  response surface through {} node(s); its minimum: {} (chi2 = {:.2f})", nodes.size(),
+                  out.params.label(), chi2_of(data, out.surface.predict(out.params, data.scale))));
+  return out;
+}
+
+}  // namespace gapflow

@@ -1,0 +1,88 @@
+// The fits of the calibration loop, on a RESPONSE SURFACE of the model.
+//
+// Why a surface: a granular flow is chaotic, so common random numbers keep the
+// packing but not the trajectory, and chi^2 evaluated run batch by run batch is
+// rough: the first version minimised it point by point with BOBYQA, and on a twin
+// two parameter sets 0.007 apart in wall friction gave chi^2 4.6 and 15.0, the
+// fitted point scored chi^2/nu 0.91 on its own seeds and 3.15 on fresh ones (the
+// optimiser had chased noise; calibrate/README.md). Instead, every point's
+// prediction (fit scale) is regressed on the free parameters over a grid of
+// nodes (a quadratic, weighted by each node's standard error), and each effect
+// adds a linear term whose slope is measured by finite differences at the nodes
+// next to the fit, under common random numbers. chi^2 of the surface is smooth;
+// NLopt's BOBYQA minimises it, and profiles are exact on it. Every fitted state
+// is then re-scored by direct simulation on fresh seeds.
+#pragma once
+
+#include "calibrate/calibration.hpp"
+
+#include <Eigen/Dense>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+using Say = std::function<void(const std::string&)>;
+
+// The data value of point i on the fit scale, and the total standard error of the
+// residual there (data and model added in quadrature).
+double data_fit_value(const DataFile& data, std::size_t i);
+double total_sigma(const DataFile& data, const Prediction& p, std::size_t i);
+// chi^2 over the fitted (or held-out) points; an invalid model point counts as 10 sigma.
+double chi2_of(const DataFile& data, const Prediction& p, bool held_out = false);
+
+// A linear effect term of the surface: d(fit)/d(key) per point.
+struct EffectTerm {
+  std::string effect, key;
+  double neutral = 0;             // the template's value (the term is 0 there)
+  double lo = 0, hi = 0;          // plausible range (key units)
+  std::vector<double> slope;      // per point
+  std::vector<double> slope_se;   // per point (paired replicate differences)
+};
+
+// The model near the fit: quadratic in the free parameters, linear in effects.
+struct Surface {
+  std::vector<std::string> keys;      // free parameters
+  std::vector<double> centre, half;   // x' = (x - centre)/half in [-1, 1] over the nodes
+  std::vector<double> lo, hi;         // the nodes' range of each free parameter (the surface holds there)
+  std::vector<Eigen::VectorXd> coef;  // per point: 1, x'_k, x'_k x'_l (k <= l)
+  std::vector<Eigen::MatrixXd> cov;   // per point: covariance of coef
+  std::vector<bool> valid;            // every node gave a value at this point
+  std::vector<EffectTerm> effects;    // added (fitted) effects
+
+  // Value, fit-scale value and its se at each point; params hold free keys and effect keys.
+  Prediction predict(const ParameterSet& params, FitScale scale) const;
+  // d(fit)/d(key) of a free parameter at `params`, per point.
+  std::vector<double> derivative(const ParameterSet& params, std::size_t k) const;
+};
+
+struct BaselineFit {
+  Surface surface;
+  ParameterSet params;                // fitted free parameters
+  std::vector<ParameterSet> nodes;    // grid nodes next to the fit (signatures are taken there)
+  std::vector<Prediction> node_predictions;
+};
+
+// Grid over the free parameters' ranges (one parameter: spacing `step`, at most
+// def.grid_max nodes; two or three: 3 levels each), all in one batch of runs (the
+// same nodes for every data file of this design, so calibrations sharing a store
+// share them); the surface through the best node's neighbourhood; BOBYQA on it.
+BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const Say& say);
+
+// Minimise chi^2 of the surface over the free parameters and the given effects
+// (starting at `start`); BOBYQA, deterministic.
+// `fixed` (optional) names a key held at its value in `start` (profiles).
+ParameterSet fit_surface(const DataFile& data, const Surface& s, const ParameterSet& start, const std::string& fixed = "");
+
+// Profile interval of effect term `e` of the surface: the values whose chi^2,
+// minimised over everything else, is within 3.84 x max(1, chi2/nu) of the minimum.
+struct ProfileInterval {
+  double lo = 0, hi = 0;
+  bool bounded_lo = true, bounded_hi = true;  // false: the range's end was reached
+};
+ProfileInterval profile_interval(const DataFile& data, const Surface& s, const ParameterSet& fitted, std::size_t e,
+                                 int fitted_parameters);
+
+}  // namespace gapflow

@@ -1,0 +1,123 @@
+#include "calibrate/twin.hpp"
+
+#include "calibrate/effect_catalogue.hpp"
+#include "common/random.hpp"
+#include "common/statistics.hpp"
+#include "common/text_file.hpp"
+#include "common/toml_strict.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace gapflow {
+
+namespace {
+
+// A size in the effect's plausible range, on the side its step points to:
+// "low" 35-60 % and "high" 70-100 % of the way from the neutral value to the range's end.
+double drawn_size(const EffectDef& e, double neutral, const std::string& size, RandomStream& rng) {
+  const double end = e.step > 0 ? e.hi : e.lo;
+  double f = rng.uniform(0.35, 1.0);
+  if (size == "low") f = rng.uniform(0.35, 0.6);
+  if (size == "high") f = rng.uniform(0.7, 1.0);
+  return neutral + f * (end - neutral);
+}
+
+std::string toml_quote(const std::string& s) { return fmt::format("\"{}\"", s); }
+
+void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, const Prediction& p,
+                     const std::filesystem::path& data_out) {
+  o << "# Made by `gapflow twin` from " << d.file.string() << ": simulated data for testing the calibration loop.\n";
+  o << "# What was planted is in the truth file, never here.\n\n";
+  o << fmt::format("[data]\nname = {}\ndescription = {}\n\n", toml_quote(def.name),
+                   toml_quote("twin of " + d.name + " (" + to_string(def.model) + " model)"));
+  o << fmt::format("[source]\ncitation = {}\nmethod = \"simulated\"\nuncertainty = {}\n\n",
+                   toml_quote(fmt::format("gapflow twin, {} model, seed {}", to_string(def.model), def.seed)),
+                   toml_quote(fmt::format("standard error of the mean of {} runs per point", def.replicates)));
+  const std::filesystem::path rel = std::filesystem::relative(std::filesystem::absolute(d.scenario),
+                                                              std::filesystem::absolute(data_out).parent_path());
+  o << fmt::format("[model]\nscenario = {}\nset = [", toml_quote(rel.generic_string()));
+  for (std::size_t i = 0; i < d.set.size(); ++i) o << (i ? ", " : "") << toml_quote(d.set[i]);
+  o << fmt::format("]\nreplicates = {}\nseed = {}\n\n", d.model_replicates, d.seed);
+  o << fmt::format("[observable]\nkind = \"{}\"\nscale = \"{}\"\nuncertainty = \"se\"\nfloor_relative = {}\n\n",
+                   to_string(d.observable), d.scale == FitScale::log ? "log" : "linear", number_text(d.floor_relative));
+  for (const DesignColumn& c : d.design)
+    o << fmt::format("[[design]]\ncolumn = {}\nkey = {}\nunit = \"{}\"\n\n", toml_quote(c.column), toml_quote(c.key),
+                     c.in_diameters ? "d" : "lab");
+  for (const FreeParameter& f : d.free)
+    o << fmt::format("[[free]]\nkey = {}\nlo = {}\nhi = {}\nstep = {}\n\n", toml_quote(f.key), number_text(f.lo),
+                     number_text(f.hi), number_text(f.step));
+  for (std::size_t i = 0; i < d.points.size(); ++i) {
+    if (!p.valid[i])
+      throw std::runtime_error(fmt::format("twin: the model gives no {} at point {} (e.g. a run never emptied)",
+                                           to_string(d.observable), d.point_label(i)));
+    const double se = d.scale == FitScale::log ? p.se_fit[i] * p.value[i] : p.se_fit[i];
+    o << "[[point]]\n";
+    for (std::size_t c = 0; c < d.design.size(); ++c) o << d.design[c].column << " = " << d.points[i].design[c] << "\n";
+    o << fmt::format("value = {}\nuncertainty = {}\nreplicates = {}\nheld_out = {}\n\n", number_text(p.value[i]),
+                     number_text(se), def.replicates, d.points[i].held_out ? "true" : "false");
+  }
+}
+
+}  // namespace
+
+TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
+  TwinTruth t;
+  RandomStream rng(mix_seed(def.seed, 0x7477696eull));  // "twin"
+  t.model_seed = design.seed + 1000003 + def.seed;      // never the seeds a calibration of it uses
+  if (def.draw_free)
+    for (const FreeParameter& f : design.free) {
+      const double span = f.hi - f.lo;
+      t.planted.push_back({"free", f.key, rng.uniform(f.lo + 0.2 * span, f.hi - 0.2 * span), kNaN});
+    }
+  for (const std::string& spec : def.effects) {
+    const std::size_t cut = spec.find_first_of(":=");
+    const std::string name = spec.substr(0, cut);
+    const EffectDef* e = find_effect(name);
+    if (!e) throw std::invalid_argument("twin: '" + name + "' is not an effect of the catalogue");
+    const double neutral = neutral_value(*e, design);
+    double value = 0;
+    if (cut != std::string::npos && spec[cut] == '=') {
+      value = std::stod(spec.substr(cut + 1));
+      if (value < e->lo || value > e->hi)
+        throw std::invalid_argument(fmt::format("twin: {} = {} is outside its plausible range [{}, {}]", name, value, e->lo, e->hi));
+    } else {
+      const std::string size = cut == std::string::npos ? "" : spec.substr(cut + 1);
+      if (!size.empty() && size != "low" && size != "high")
+        throw std::invalid_argument("twin: size '" + size + "' of " + name + " must be low or high");
+      value = drawn_size(*e, neutral, size, rng);
+    }
+    t.planted.push_back({name, e->key, value, neutral});
+  }
+  for (const std::string& s : def.set) {
+    const std::size_t eq = s.find('=');
+    if (eq == std::string::npos) throw std::invalid_argument("twin: --set takes key=value, not '" + s + "'");
+    t.planted.push_back({"set", s.substr(0, eq), std::stod(s.substr(eq + 1)), kNaN});
+  }
+  return t;
+}
+
+TwinTruth make_twin(const DataFile& design, const TwinDef& def, Evaluator& evaluator,
+                    const std::filesystem::path& data_out, const std::filesystem::path& truth_out) {
+  const TwinTruth truth = draw_twin(design, def);
+  ParameterSet planted;
+  for (const PlantedValue& v : truth.planted) planted = planted.with(v.key, v.value);
+  const Prediction p = evaluator.evaluate({planted}, truth.model_seed, def.replicates).front();
+  write_file_atomically(data_out, [&](std::ostream& o) { write_twin_file(o, design, def, p, data_out); });
+  write_file_atomically(truth_out, [&](std::ostream& o) {
+    o << "{\n  \"twin\": \"" << def.name << "\",\n  \"model\": \"" << to_string(def.model) << "\",\n";
+    o << fmt::format("  \"seed\": {},\n  \"model_seed\": {},\n  \"replicates\": {},\n  \"planted\": [", def.seed,
+                     truth.model_seed, def.replicates);
+    for (std::size_t i = 0; i < truth.planted.size(); ++i) {
+      const PlantedValue& v = truth.planted[i];
+      o << fmt::format("{}\n    {{\"name\": \"{}\", \"key\": \"{}\", \"value\": {}, \"neutral\": {}}}", i ? "," : "", v.name,
+                       v.key, v.value, std::isfinite(v.neutral) ? fmt::format("{}", v.neutral) : "null");
+    }
+    o << "\n  ]\n}\n";
+  });
+  return truth;
+}
+
+}  // namespace gapflow

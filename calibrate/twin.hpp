@@ -1,0 +1,46 @@
+// Twins: measured-data files made by a model with hidden effects, for testing the
+// calibration loop where the truth is known. The data file a twin writes says
+// nothing about the effects in it; the truth goes to a separate JSON file that
+// `gapflow calibrate` never reads. The design (points, observable, free
+// parameters, held-out points) is the one of the data file given, as a user made it.
+#pragma once
+
+#include "calibrate/data_file.hpp"
+#include "calibrate/evaluator.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+struct TwinDef {
+  std::string name;                  // [data] name of the twin
+  ModelKind model = ModelKind::box2d;// the model that makes the data (3d for the non-identical twin)
+  std::uint64_t seed = 1;            // draws the hidden sizes and the free parameters' true values
+  std::vector<std::string> effects;  // catalogue effects to plant: "name" (size drawn), "name:low", "name:high", "name=value"
+  std::vector<std::string> set;      // overrides planted as they are (e.g. an effect outside the catalogue)
+  int replicates = 10;               // runs per point behind each value (its se from their spread)
+  bool draw_free = true;             // the free parameters' true values drawn inside their ranges
+};
+
+struct PlantedValue {
+  std::string name;  // catalogue effect, "free" or "set"
+  std::string key;
+  double value = 0, neutral = 0;
+};
+
+struct TwinTruth {
+  std::vector<PlantedValue> planted;
+  std::uint64_t model_seed = 0;  // run.seed of the twin's runs (never the calibration's)
+};
+
+// The planted values (drawn from def.seed), without running anything.
+TwinTruth draw_twin(const DataFile& design, const TwinDef& def);
+
+// Run the design with the planted values and write the twin data file and its truth.
+TwinTruth make_twin(const DataFile& design, const TwinDef& def, Evaluator& evaluator,
+                    const std::filesystem::path& data_out, const std::filesystem::path& truth_out);
+
+}  // namespace gapflow
