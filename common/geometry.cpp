@@ -15,7 +15,12 @@
 namespace gapflow {
 
 double CompiledScenario::inplane_gravity() const { return kStandardGravity * std::sin(incline); }
-double CompiledScenario::normal_gravity() const { return kStandardGravity * std::cos(incline); }
+double CompiledScenario::across_gravity() const {
+  return kStandardGravity * std::cos(incline) * std::sin(lateral_tilt);
+}
+double CompiledScenario::normal_gravity() const {
+  return kStandardGravity * std::cos(incline) * std::cos(lateral_tilt);
+}
 
 double CompiledScenario::half_width_at(double y) const {
   if (y >= funnel_height) return channel_width / 2;
@@ -44,8 +49,10 @@ std::string num(double v) { return fmt::format("{:g}", v); }
 // --- Stage 1: units ----------------------------------------------------------
 void convert_units(const ScenarioDef& def, CompiledScenario& c) {
   c.incline = deg_to_rad(def.plane.incline_deg);
+  c.lateral_tilt = deg_to_rad(def.plane.lateral_tilt_deg);
   c.nominal_diameter = mm_to_m(def.particles.diameter_mm);
-  c.gap = mm_to_m(def.bottleneck.gap_mm);
+  c.declared_gap = mm_to_m(def.bottleneck.gap_mm);
+  c.gap = mm_to_m(def.bottleneck.gap_mm + def.bottleneck.gap_offset_mm);
   c.channel_width = mm_to_m(def.plane.width_mm);
   c.plane_length = mm_to_m(def.plane.length_mm);
   c.wall_angle = deg_to_rad(def.bottleneck.wall_angle_deg);
@@ -57,6 +64,10 @@ void convert_units(const ScenarioDef& def, CompiledScenario& c) {
 // --- Stage 2: walls ----------------------------------------------------------
 void build_walls(CompiledScenario& c) {
   const ScenarioDef& d = c.def;
+  if (c.gap >= c.channel_width && d.bottleneck.gap_offset_mm != 0)
+    throw ScenarioInvalid("bottleneck.gap_offset_mm", num(d.bottleneck.gap_offset_mm),
+                          fmt::format("must keep the effective gap W + delta below plane.width_mm = {}",
+                                      num(d.plane.width_mm)));
   if (c.gap >= c.channel_width)
     throw ScenarioInvalid("bottleneck.gap_mm", num(d.bottleneck.gap_mm),
                           fmt::format("must be smaller than plane.width_mm = {}", num(d.plane.width_mm)));
@@ -112,6 +123,17 @@ std::vector<Vec2> obstruction_outline_local(const ObstructionDef& o) {
   }
 }
 
+// The core of a polygon whose corners are rounded with obstruction.corner_radius_mm.
+ConvexPolygon round_corners(const ConvexPolygon& drawn, const ObstructionDef& o, double& radius_out) {
+  radius_out = mm_to_m(o.corner_radius_mm);
+  if (radius_out <= 0) return drawn;
+  const double limit = inradius(drawn);
+  if (radius_out >= limit)
+    throw ScenarioInvalid("obstruction.corner_radius_mm", num(o.corner_radius_mm),
+                          fmt::format("must be below the shape's inradius, {:.4g} mm", limit * 1e3));
+  return inward_offset(drawn, radius_out);
+}
+
 void place_obstruction(CompiledScenario& c) {
   const ObstructionDef& o = c.def.obstruction;
   ObstructionGeometry& g = c.obstruction;
@@ -133,9 +155,12 @@ void place_obstruction(CompiledScenario& c) {
     for (Vec2 p : v) ymin = std::min(ymin, p.y);
     const Vec2 shift{dx - centroid.x, by_nearest ? D - ymin : D - centroid.y};
     for (Vec2& p : v) p = p + shift;
-    g.polygon = {std::move(v)};
     g.centroid = centroid + shift;
-    g.nearest_y = ymin + shift.y;
+    // Rounded in place: the drawn polygon is placed first, then its corners are rounded, so
+    // the faces stay put and a corner's nearest point moves inward.
+    g.polygon = round_corners(ConvexPolygon{std::move(v)}, o, g.corner_radius);
+    g.nearest_y = 1e300;
+    for (Vec2 p : g.polygon.vertices) g.nearest_y = std::min(g.nearest_y, p.y - g.corner_radius);
   }
   g.reference_point = by_nearest ? Vec2{g.centroid.x, g.nearest_y} : g.centroid;
   if (g.nearest_y < 0)
@@ -165,7 +190,8 @@ double distance_convex_convex(const std::vector<Vec2>& a, const std::vector<Vec2
 double distance_obstruction_to(const ObstructionGeometry& g, const ConvexPolygon& wall) {
   if (g.shape == ObstructionShape::cylinder)
     return signed_distance_to_convex(wall.vertices, g.circle.centre) - g.circle.radius;
-  return distance_convex_convex(g.polygon.vertices, wall.vertices);
+  const double d = distance_convex_convex(g.polygon.vertices, wall.vertices);
+  return d < 0 ? d : d - g.corner_radius;
 }
 
 void check_obstruction_clearance(const CompiledScenario& c) {
@@ -181,7 +207,7 @@ void check_obstruction_clearance(const CompiledScenario& c) {
                          : [&] {
                              double y = -1e300;
                              for (Vec2 p : c.obstruction.polygon.vertices) y = std::max(y, p.y);
-                             return y;
+                             return y + c.obstruction.corner_radius;
                            }();
   if (top + 2 * c.nominal_diameter >= c.plane_length)
     throw ScenarioInvalid("obstruction.distance_mm", num(c.def.obstruction.distance_mm),
@@ -250,7 +276,7 @@ double obstruction_distance(const ObstructionGeometry& g, Vec2 p) {
     case ObstructionShape::cylinder:
       return length(p - g.circle.centre) - g.circle.radius;
     default:
-      return signed_distance_to_convex(g.polygon.vertices, p);
+      return signed_distance_to_convex(g.polygon.vertices, p) - g.corner_radius;
   }
 }
 
@@ -265,6 +291,15 @@ bool obstruction_blocks_segment(const ObstructionGeometry& g, Vec2 a, Vec2 b) {
       if (inside_convex(v, a) || inside_convex(v, b)) return true;
       for (size_t i = 0; i < v.size(); ++i)
         if (segments_intersect(a, b, v[i], v[(i + 1) % v.size()])) return true;
+      if (g.corner_radius <= 0) return false;
+      // Rounded: the segment passes through the shape if it comes closer than r to the core.
+      // Neither crosses the other here, so the closest pair involves an end point.
+      for (size_t i = 0; i < v.size(); ++i) {
+        const Vec2 c = v[i], e = v[(i + 1) % v.size()];
+        const double d = std::min({distance_to_segment(c, a, b), distance_to_segment(a, c, e),
+                                   distance_to_segment(b, c, e)});
+        if (d < g.corner_radius) return true;
+      }
       return false;
     }
   }
@@ -284,6 +319,45 @@ double clearance_to_bottleneck_walls(const CompiledScenario& c, Vec2 p) {
 bool fits_on_board(const CompiledScenario& c, Vec2 p, double radius) {
   return std::abs(p.x) <= c.channel_width / 2 - radius && p.y >= radius && p.y <= c.plane_length - radius &&
          clearance_to_bottleneck_walls(c, p) >= radius && obstruction_distance(c.obstruction, p) >= radius;
+}
+
+ConvexPolygon inward_offset(const ConvexPolygon& polygon, double distance) {
+  // Clip the polygon by each edge's half-plane shifted inward (Sutherland-Hodgman).
+  const std::vector<Vec2>& src = polygon.vertices;
+  std::vector<Vec2> out = src;
+  for (size_t i = 0; i < src.size() && !out.empty(); ++i) {
+    const Vec2 a = src[i], b = src[(i + 1) % src.size()];
+    const Vec2 edge = b - a;
+    const Vec2 n = (1.0 / length(edge)) * Vec2{-edge.y, edge.x};  // inward (counter-clockwise polygon)
+    auto inside = [&](Vec2 p) { return dot(p - a, n) - distance; };
+    std::vector<Vec2> kept;
+    for (size_t k = 0; k < out.size(); ++k) {
+      const Vec2 p = out[k], q = out[(k + 1) % out.size()];
+      const double sp = inside(p), sq = inside(q);
+      if (sp >= 0) kept.push_back(p);
+      if ((sp >= 0) != (sq >= 0)) kept.push_back(p + (sp / (sp - sq)) * (q - p));
+    }
+    out = std::move(kept);
+  }
+  // Merge points that clipping made coincide (an edge that shrank to nothing).
+  std::vector<Vec2> merged;
+  const double tol = 1e-12 * std::max(1.0, distance);
+  for (Vec2 p : out)
+    if (merged.empty() || length(p - merged.back()) > tol) merged.push_back(p);
+  while (merged.size() > 1 && length(merged.front() - merged.back()) <= tol) merged.pop_back();
+  if (merged.size() < 3 || signed_area2(merged) <= 0) return {};
+  return {std::move(merged)};
+}
+
+double inradius(const ConvexPolygon& polygon) {
+  double lo = 0, hi = 0;
+  for (Vec2 p : polygon.vertices)
+    for (Vec2 q : polygon.vertices) hi = std::max(hi, length(p - q));
+  for (int i = 0; i < 100 && hi - lo > 1e-12 * hi; ++i) {
+    const double mid = (lo + hi) / 2;
+    (inward_offset(polygon, mid).vertices.empty() ? hi : lo) = mid;
+  }
+  return lo;
 }
 
 double obstruction_wall_clearance(const CompiledScenario& c) {

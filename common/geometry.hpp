@@ -28,10 +28,12 @@ struct Circle {
 struct ObstructionGeometry {
   ObstructionShape shape = ObstructionShape::none;
   Circle circle{};         // when shape == cylinder
-  ConvexPolygon polygon;   // when shape == triangle or polygon
+  ConvexPolygon polygon;   // when shape == triangle or polygon: the core, i.e. the drawn polygon moved
+                           // inward by corner_radius (the drawn polygon itself when it is 0)
+  double corner_radius = 0;  // m, r: the obstruction is the core Minkowski-summed with a disc of radius r
   Vec2 reference_point{};  // m, the point whose y is D (nearest point or centroid)
   double nearest_y = 0;    // m, smallest y of the shape (distance of its nearest point to the gap line)
-  Vec2 centroid{};         // m
+  Vec2 centroid{};         // m, of the drawn shape
 };
 
 // One particle as released (before settling).
@@ -47,8 +49,10 @@ struct CompiledScenario {
 
   // Lab-unit quantities in SI.
   double incline = 0;            // rad
+  double lateral_tilt = 0;       // rad, phi: roll of the board about its fall line
   double nominal_diameter = 0;   // m, d
-  double gap = 0;                // m, W
+  double gap = 0;                // m, the tips' real distance W + delta (what the walls are built for)
+  double declared_gap = 0;       // m, W as declared (bottleneck.gap_mm): what records and W/d report
   double channel_width = 0;      // m, between retaining walls
   double plane_length = 0;       // m, gap line to top wall
   double wall_angle = 0;         // rad, bottleneck wall to the retaining wall
@@ -73,10 +77,12 @@ struct CompiledScenario {
   std::vector<ParticleSeed> particles;  // count entries, index = particle id
 
   // Derived, for reports.
-  double w_over_d() const { return gap / nominal_diameter; }
-  // Gravity component along the board, m/s^2 (g sin theta).
+  double w_over_d() const { return declared_gap / nominal_diameter; }
+  // Gravity component down the fall line (-y), m/s^2 (g sin theta).
   double inplane_gravity() const;
-  // Gravity component normal to the board, m/s^2 (g cos theta).
+  // Gravity component across the channel (+x), m/s^2 (g cos theta sin phi).
+  double across_gravity() const;
+  // Gravity component normal to the board, m/s^2 (g cos theta cos phi).
   double normal_gravity() const;
   // Half-width of the open channel at height y (funnel or retaining walls), m.
   double half_width_at(double y) const;
@@ -97,6 +103,11 @@ double obstruction_distance(const ObstructionGeometry& g, Vec2 p);
 // Whether the segment [a, b] passes through the obstruction (touching its outline does not count
 // for a cylinder; for a polygon it does).
 bool obstruction_blocks_segment(const ObstructionGeometry& g, Vec2 a, Vec2 b);
+// The convex polygon moved inward by `distance` (m): every edge shifted along its inward
+// normal, edges that vanish dropped (an erosion by a disc). Empty when nothing is left.
+ConvexPolygon inward_offset(const ConvexPolygon& polygon, double distance);
+// Radius (m) of the largest disc inside a convex polygon.
+double inradius(const ConvexPolygon& polygon);
 // Smallest clearance (m) between the obstruction and the bottleneck/retaining walls (negative = overlap).
 double obstruction_wall_clearance(const CompiledScenario& c);
 

@@ -25,6 +25,8 @@ struct PlaneDef {
   double incline_deg = 8.0;   // deg, angle of the board to the horizontal (paper: 8)
   double length_mm = 1000.0;  // mm, from the gap line to the top wall
   double width_mm = 300.0;    // mm, between the retaining walls
+  double lateral_tilt_deg = 0.0;  // deg, roll of the board about its fall line: gravity gains
+                                  // g cos(theta) sin(phi) along +x, the normal part becomes g cos(theta) cos(phi)
 };
 
 // [bottleneck] Two walls from the retaining walls down to the gap.
@@ -32,6 +34,8 @@ struct BottleneckDef {
   double wall_angle_deg = 30.0;    // deg, to the retaining walls (paper: 30; 90 = flat-bottomed silo)
   double gap_mm = 33.0;            // mm, W: distance between the two wall tips
   double wall_thickness_mm = 10.0; // mm, measured normal to the wall's inner face
+  double gap_offset_mm = 0.0;      // mm, delta: the tips stand W + delta apart (walls not where drawn);
+                                   // records and W/d keep the declared W
 };
 
 enum class SizeDistribution { none, uniform, normal };
@@ -49,6 +53,8 @@ struct ParticlesDef {
   double restitution = 0.1;         // pair coefficient of restitution (paper: little effect)
   double rolling_resistance = 0.0;  // dimensionless: resisting force / normal force on the board
   double spinning_friction_mm = 0.0;// mm, torsional friction length about the contact normal (3D)
+  double drag_per_s = 0.0;          // 1/s, gamma: linear drag force -gamma m v on each particle's translation
+  double quadratic_drag_per_m = 0.0;// 1/m, c: quadratic drag force -c m |v| v on each particle's translation
 };
 
 // [release] Particles are packed from rest above a barrier that opens at t = 0.
@@ -73,6 +79,7 @@ struct ObstructionDef {
   double distance_mm = 0.0;           // mm, D: gap line to the reference point, measured uphill
   DistanceReference reference = DistanceReference::nearest;  // nearest point of the shape, or its centre (centroid)
   double lateral_offset_mm = 0.0;     // mm, shift across the channel (+x)
+  double corner_radius_mm = 0.0;      // mm, triangle/polygon corners rounded in place (faces stay; < inradius)
 };
 
 // [shaking.walls] and [shaking.obstruction]: decaying oscillation every period.

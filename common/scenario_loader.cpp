@@ -303,6 +303,7 @@ void read_plane(Section s, PlaneDef& p) {
   s.number("incline_deg", p.incline_deg, upper_open(0, 60, "deg"));
   s.number("length_mm", p.length_mm, above(0, "mm"));
   s.number("width_mm", p.width_mm, above(0, "mm"));
+  s.number("lateral_tilt_deg", p.lateral_tilt_deg, closed(-10, 10, "deg"));
   s.finish();
 }
 
@@ -310,7 +311,13 @@ void read_bottleneck(Section s, BottleneckDef& b) {
   s.number("wall_angle_deg", b.wall_angle_deg, lower_open(0, 90, "deg"));
   s.number("gap_mm", b.gap_mm, above(0, "mm"));
   s.number("wall_thickness_mm", b.wall_thickness_mm, above(0, "mm"));
+  s.number("gap_offset_mm", b.gap_offset_mm, any("mm"));
   s.finish();
+  // W + delta < plane.width_mm is checked by compile_scenario (it needs the plane).
+  if (b.gap_mm + b.gap_offset_mm <= 0)
+    s.fail_value("gap_offset_mm", toml_double(b.gap_offset_mm),
+                 fmt::format("must be > -bottleneck.gap_mm ({}): the effective gap W + delta must stay > 0 (mm)",
+                             toml_double(b.gap_mm)));
 }
 
 // A number of mm, or one of the glass-bead presets of the paper.
@@ -347,6 +354,8 @@ void read_particles(Section s, ParticlesDef& p) {
   s.number("restitution", p.restitution, closed(0, 1));
   s.number("rolling_resistance", p.rolling_resistance, upper_open(0, 1));
   s.number("spinning_friction_mm", p.spinning_friction_mm, at_least(0, "mm"));
+  s.number("drag_per_s", p.drag_per_s, closed(0, 100, "1/s"));
+  s.number("quadratic_drag_per_m", p.quadratic_drag_per_m, closed(0, 100, "1/m"));
   s.finish();
 }
 
@@ -456,7 +465,13 @@ void read_obstruction(Section s, ObstructionDef& o) {
                                                          {"center", DistanceReference::centre}}))
     o.reference = *r;
   s.number("lateral_offset_mm", o.lateral_offset_mm, any("mm"));
+  // Below the shape's inradius: checked by compile_scenario, which builds the outline.
+  s.number("corner_radius_mm", o.corner_radius_mm, at_least(0, "mm"));
   s.finish();
+  if (o.corner_radius_mm > 0 && o.shape != ObstructionShape::triangle && o.shape != ObstructionShape::polygon)
+    s.fail_value("corner_radius_mm", toml_double(o.corner_radius_mm),
+                 fmt::format("must be 0 for shape = \"{}\": only triangle and polygon corners can be rounded",
+                             to_string(o.shape)));
 }
 
 void read_shake(Section s, ShakeDef& k) {
@@ -714,10 +729,13 @@ void write_head(TomlWriter& w, const ScenarioDef& d) {
   w.put("incline_deg", d.plane.incline_deg);
   w.put("length_mm", d.plane.length_mm);
   w.put("width_mm", d.plane.width_mm);
+  // Keys added after results were stored are written only when set, so that older hashes stay valid.
+  if (d.plane.lateral_tilt_deg != 0) w.put("lateral_tilt_deg", d.plane.lateral_tilt_deg);
   w.section("bottleneck");
   w.put("wall_angle_deg", d.bottleneck.wall_angle_deg);
   w.put("gap_mm", d.bottleneck.gap_mm);
   w.put("wall_thickness_mm", d.bottleneck.wall_thickness_mm);
+  if (d.bottleneck.gap_offset_mm != 0) w.put("gap_offset_mm", d.bottleneck.gap_offset_mm);
 }
 
 void write_particles(TomlWriter& w, const ParticlesDef& p, const ReleaseDef& r) {
@@ -733,6 +751,8 @@ void write_particles(TomlWriter& w, const ParticlesDef& p, const ReleaseDef& r) 
   w.put("restitution", p.restitution);
   w.put("rolling_resistance", p.rolling_resistance);
   w.put("spinning_friction_mm", p.spinning_friction_mm);
+  if (p.drag_per_s != 0) w.put("drag_per_s", p.drag_per_s);
+  if (p.quadratic_drag_per_m != 0) w.put("quadratic_drag_per_m", p.quadratic_drag_per_m);
   w.section("release");
   w.put("barrier_mm", r.barrier_mm);
   w.put("settle_s", r.settle_s);
@@ -751,6 +771,7 @@ void write_obstruction(TomlWriter& w, const ObstructionDef& o) {
   w.put("distance_mm", o.distance_mm);
   w.put("reference", to_string(o.reference));
   w.put("lateral_offset_mm", o.lateral_offset_mm);
+  if (o.corner_radius_mm != 0) w.put("corner_radius_mm", o.corner_radius_mm);
 }
 
 void write_protocol(TomlWriter& w, const ProtocolDef& p) {

@@ -30,7 +30,7 @@ void fill_identity(const CompiledScenario& sc, const EngineSession& session, Run
   r.run_seed = sc.run_seed;
   r.time_step_s = session.time_step();
   r.diameter_m = sc.nominal_diameter;
-  r.gap_m = sc.gap;
+  r.gap_m = sc.declared_gap;  // the declared W, also when the walls stand elsewhere (bottleneck.gap_offset_mm)
   r.distance_m = sc.def.obstruction.shape == ObstructionShape::none ? 0.0 : sc.def.obstruction.distance_mm * 1e-3;
   r.incline_rad = sc.incline;
 }

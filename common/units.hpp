@@ -39,6 +39,8 @@ struct EngineScaling {
   double to_engine_velocity(double m_per_s) const { return m_per_s * length / time; }
   double to_lab_velocity(double e) const { return e * time / length; }
   // Acceleration scales as length/time^2 = 1 under Froude scaling; kept explicit.
+  // A rate (1/s), e.g. a drag coefficient per second.
+  double to_engine_rate(double per_s) const { return per_s / time; }
   double to_engine_acceleration(double m_per_s2) const { return m_per_s2 * length / (time * time); }
   double to_engine_mass(double kg) const { return kg * length * length * length; }  // same density number
 };

@@ -66,6 +66,31 @@ void BaseFrictionEffect::before_step(World2D& w) {
   }
 }
 
+void LinearDragEffect::attach(World2D& w) {
+  const double h = w.dt_engine;
+  for (int i : w.active) {
+    b2Body* b = w.particles[static_cast<size_t>(i)];
+    // Decay rate of the body: the drag acts on the sphere's mass, the body has the rolling mass.
+    const double rate = w.scale.to_engine_rate(gamma_) * w.props[static_cast<size_t>(i)].true_mass / b->GetMass();
+    b->SetLinearDamping(static_cast<float>(std::expm1(h * rate) / h));
+  }
+}
+
+void QuadraticDragEffect::before_step(World2D& w) {
+  const double c = c_ / w.scale.length;  // 1/(engine length)
+  const double h = w.dt_engine;
+  for (int i : w.active) {
+    b2Body* b = w.particles[static_cast<size_t>(i)];
+    const b2Vec2 v = b->GetLinearVelocity();
+    const double speed = v.Length();
+    if (speed <= 0) continue;
+    const double m = w.props[static_cast<size_t>(i)].true_mass, M = b->GetMass();
+    // Force that turns v into v / (1 + c (m/M) |v| h) over the step.
+    const double f = c * m * speed * speed / (1 + c * (m / M) * speed * h);
+    b->ApplyForceToCenter(static_cast<float>(-f / speed) * v, false);
+  }
+}
+
 std::vector<std::unique_ptr<ReducedEffect2D>> make_effects2d(const CompiledScenario& sc) {
   std::vector<std::unique_ptr<ReducedEffect2D>> effects;
   const Box2DDef& m = sc.def.model.box2d;
@@ -74,6 +99,8 @@ std::vector<std::unique_ptr<ReducedEffect2D>> make_effects2d(const CompiledScena
   if (m.base_friction.enabled && (p.rolling_resistance > 0 || p.spinning_friction_mm > 0))
     effects.push_back(std::make_unique<BaseFrictionEffect>(m.base_friction.method, p.rolling_resistance,
                                                            p.spinning_friction_mm * 1e-3));
+  if (p.drag_per_s > 0) effects.push_back(std::make_unique<LinearDragEffect>(p.drag_per_s));
+  if (p.quadratic_drag_per_m > 0) effects.push_back(std::make_unique<QuadraticDragEffect>(p.quadratic_drag_per_m));
   return effects;
 }
 

@@ -54,6 +54,34 @@ class BaseFrictionEffect final : public ReducedEffect2D {
   double spin_len_m_;  // m (lab)
 };
 
+// Linear drag -gamma m v on the sphere's translation (air, a viscous film on the board).
+// The body carries the rolling mass (1+k) m, so a sphere rolling without slipping decays
+// as exp(-gamma t / (1+k)): the drag acts on m, the inertia is (1+k) m. Applied as Box2D's
+// linear damping, which the solver integrates implicitly (also inside contacts) as
+// v *= 1 / (1 + h c) per step; c is chosen so that this factor is exactly exp(-h gamma m / M).
+class LinearDragEffect final : public ReducedEffect2D {
+ public:
+  explicit LinearDragEffect(double gamma_per_s) : gamma_(gamma_per_s) {}
+  const char* name() const override { return "linear_drag"; }
+  void attach(World2D& world) override;
+
+ private:
+  double gamma_;  // 1/s (lab)
+};
+
+// Quadratic drag -c m |v| v on the sphere's translation: a force before every step. Over one
+// step it gives the exact free solution v / (1 + c' |v| h), c' = c m / M, so the
+// explicit integration adds no error of order h to the drag law.
+class QuadraticDragEffect final : public ReducedEffect2D {
+ public:
+  explicit QuadraticDragEffect(double c_per_m) : c_(c_per_m) {}
+  const char* name() const override { return "quadratic_drag"; }
+  void before_step(World2D& world) override;
+
+ private:
+  double c_;  // 1/m (lab)
+};
+
 std::vector<std::unique_ptr<ReducedEffect2D>> make_effects2d(const CompiledScenario& scenario);
 
 }  // namespace gapflow

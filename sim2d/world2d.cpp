@@ -37,9 +37,12 @@ b2FixtureDef wall_fixture(const b2Shape* shape, const ParticlesDef& p, float res
 }
 
 // Add a convex polygon (lab metres, relative to `origin_m`) to a body; polygons
-// with more than b2_maxPolygonVertices vertices are split into a fan.
+// with more than b2_maxPolygonVertices vertices are split into a fan. A `rounding_m` > 0
+// becomes the shape's skin (m_radius): Box2D's polygon-circle collision measures
+// separation from the polygon minus m_radius, so the shape is the polygon
+// Minkowski-summed with a disc (every fan piece rounded: the union is the same shape).
 void add_polygon(World2D& w, b2Body* body, const std::vector<Vec2>& vertices, Vec2 origin_m,
-                 const ParticlesDef& p, float threshold) {
+                 const ParticlesDef& p, float threshold, double rounding_m = 0) {
   std::vector<b2Vec2> v;
   for (Vec2 q : vertices) v.push_back(w.to_engine(q - origin_m));
   const size_t max_n = b2_maxPolygonVertices;
@@ -53,6 +56,7 @@ void add_polygon(World2D& w, b2Body* body, const std::vector<Vec2>& vertices, Ve
     if (shape.m_count != static_cast<int32>(piece.size()))
       throw std::runtime_error("Box2D rejected a wall or obstruction polygon (vertices closer than its slop at "
                                "this engine scale: raise model.box2d.engine_diameter)");
+    if (rounding_m > 0) shape.m_radius = static_cast<float>(w.scale.to_engine_length(rounding_m));
     b2FixtureDef f = wall_fixture(&shape, p, threshold);
     body->CreateFixture(&f);
   }
@@ -84,8 +88,10 @@ std::unique_ptr<World2D> build_world2d(const CompiledScenario& sc, const BodyMod
   w->position_iterations = engine.position_iterations;
   w->normal_gravity = w->scale.to_engine_acceleration(sc.normal_gravity());
 
-  const double g_plane = w->scale.to_engine_acceleration(sc.inplane_gravity()) * model.gravity_factor;
-  w->world = std::make_unique<b2World>(b2Vec2(0.0f, static_cast<float>(-g_plane)));
+  // In-plane gravity: down the fall line (-y) and, on a laterally tilted board, across (+x).
+  const double g_down = w->scale.to_engine_acceleration(sc.inplane_gravity()) * model.gravity_factor;
+  const double g_across = w->scale.to_engine_acceleration(sc.across_gravity()) * model.gravity_factor;
+  w->world = std::make_unique<b2World>(b2Vec2(static_cast<float>(g_across), static_cast<float>(-g_down)));
   w->world->SetAllowSleeping(engine.sleeping);
   w->world->SetContinuousPhysics(engine.continuous_collision);
   w->listener = std::make_unique<PairMaterials>(static_cast<float>(def.particles.friction_particle),
@@ -125,7 +131,8 @@ std::unique_ptr<World2D> build_world2d(const CompiledScenario& sc, const BodyMod
       b2FixtureDef f = wall_fixture(&circle, p, threshold);
       w->obstruction->CreateFixture(&f);
     } else {
-      add_polygon(*w, w->obstruction, sc.obstruction.polygon.vertices, origin, p, threshold);
+      add_polygon(*w, w->obstruction, sc.obstruction.polygon.vertices, origin, p, threshold,
+                  sc.obstruction.corner_radius);
     }
     w->obstruction_rest = w->obstruction->GetPosition();
   }

@@ -10,6 +10,7 @@
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -177,6 +178,8 @@ struct PlacedShape {
   btTransform pose;
 };
 
+PlacedShape make_hull_prism(const std::vector<Point2>& shrunk, double z0, double z1, double margin);
+
 // Right prism over a convex polygon (engine units), from z0 to z1.
 PlacedShape make_prism(const std::vector<Point2>& poly, double z0, double z1, double margin) {
   double cx = 0, cy = 0;
@@ -196,8 +199,20 @@ PlacedShape make_prism(const std::vector<Point2>& poly, double z0, double z1, do
     out.shape = std::move(box);
     return out;
   }
+  return make_hull_prism(shrink_convex(poly, margin), z0, z1, margin);
+}
+
+// Prism over a polygon already moved inward by `margin` (engine units): Bullet's hull plus
+// its margin is that polygon Minkowski-summed with a disc of radius margin.
+PlacedShape make_hull_prism(const std::vector<Point2>& shrunk, double z0, double z1, double margin) {
+  double cx = 0, cy = 0;
+  for (Point2 p : shrunk) cx += p.x / shrunk.size(), cy += p.y / shrunk.size();
+  const double zc = (z0 + z1) / 2, hz = (z1 - z0) / 2;
+  PlacedShape out;
+  out.pose.setIdentity();
+  out.pose.setOrigin(btVector3(cx, cy, zc));
   auto hull = std::make_unique<btConvexHullShape>();
-  for (Point2 p : shrink_convex(poly, margin)) {
+  for (Point2 p : shrunk) {
     hull->addPoint(btVector3(p.x - cx, p.y - cy, -hz + margin), false);
     hull->addPoint(btVector3(p.x - cx, p.y - cy, hz - margin), false);
   }
@@ -246,6 +261,8 @@ struct Session3D::World {
   bool sleeping = false;
   bullet3d::MaterialTable materials;
   ShakeOffsets target{};
+  double linear_damping = 0;  // Bullet's linear damping of every sphere (particles.drag_per_s)
+  double quadratic_drag = 0;  // 1/(engine length), particles.quadratic_drag_per_m
 
   // Bullet objects; the world must be destroyed after every body is removed (see ~World).
   btDefaultCollisionConfiguration config;
@@ -297,7 +314,13 @@ void configure_world(World3D& w, const CompiledScenario& sc) {
 
   // Tilted gravity, axis-aligned geometry: Froude scaling keeps g = 9.81 engine units.
   const double g = w.scale.to_engine_acceleration(kStandardGravity);
-  w.world.setGravity(btVector3(0, -g * std::sin(sc.incline), -g * std::cos(sc.incline)));
+  // A lateral tilt phi (plane.lateral_tilt_deg) rolls the board about its fall line.
+  const double th = sc.incline, phi = sc.lateral_tilt;
+  w.world.setGravity(btVector3(g * std::cos(th) * std::sin(phi), -g * std::sin(th), -g * std::cos(th) * std::cos(phi)));
+  // Drag on the spheres' translation. Bullet damps v *= (1 - c)^dt (btRigidBody::applyDamping,
+  // before the constraints): c = 1 - exp(-gamma) gives exactly exp(-gamma dt).
+  w.linear_damping = -std::expm1(-w.scale.to_engine_rate(sc.def.particles.drag_per_s));
+  w.quadratic_drag = sc.def.particles.quadratic_drag_per_m / w.scale.length;  // 1/(engine length)
 
   btContactSolverInfo& info = w.world.getSolverInfo();
   info.m_numIterations = b.solver_iterations;
@@ -379,6 +402,13 @@ void add_obstruction(World3D& w, const CompiledScenario& sc) {
     placed.pose.setIdentity();
     placed.pose.setOrigin(btVector3(w.scale.to_engine_length(g.circle.centre.x),
                                     w.scale.to_engine_length(g.circle.centre.y), (z0 + z1) / 2));
+  } else if (g.corner_radius > 0) {
+    // Rounded corners (obstruction.corner_radius_mm): the compiled polygon is the core, the
+    // rounding radius r becomes the hull's margin; a margin above r rounds further, so
+    // then the core is moved in by the difference first.
+    const double r = w.scale.to_engine_length(g.corner_radius), rounding = std::max(r, margin);
+    const ConvexPolygon core = inward_offset(g.polygon, w.scale.to_lab_length(rounding - r));
+    placed = make_hull_prism(to_engine(core, w.scale), z0, z1, rounding);
   } else {
     placed = make_prism(to_engine(g.polygon, w.scale), z0, z1, margin);
   }
@@ -397,6 +427,7 @@ void add_particles(World3D& w, const CompiledScenario& sc) {
     btVector3 inertia;
     shape->calculateLocalInertia(mass, inertia);  // 2/5 m r^2
     btRigidBody::btRigidBodyConstructionInfo ci(mass, nullptr, shape.get(), inertia);
+    ci.m_linearDamping = w.linear_damping;
     ci.m_startWorldTransform.setIdentity();
     ci.m_startWorldTransform.setOrigin(btVector3(w.scale.to_engine_length(seed.position.x),
                                                  w.scale.to_engine_length(seed.position.y), r));
@@ -415,6 +446,17 @@ void add_particles(World3D& w, const CompiledScenario& sc) {
 }
 
 // --- Step stages -------------------------------------------------------------
+
+// Quadratic drag -c m |v| v at each sphere's centre, for the coming Bullet step (Bullet
+// clears forces after every step). Explicit: relative error ~ c |v| dt per unit c |v| t.
+void apply_quadratic_drag(World3D& w) {
+  if (w.quadratic_drag <= 0) return;
+  for (auto& p : w.particles) {
+    if (!p) continue;
+    const btVector3 v = p->getLinearVelocity();
+    p->applyCentralForce(-w.quadratic_drag / p->getInvMass() * v.length() * v);
+  }
+}
 
 Vec2 lerp(Vec2 a, Vec2 b, double f) { return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f}; }
 
@@ -478,6 +520,7 @@ void Session3D::step() {
     place_kinematic(w, w.left_wall, lerp(w.left_wall.offset_from, to.left_wall, f));
     place_kinematic(w, w.right_wall, lerp(w.right_wall.offset_from, to.right_wall, f));
     place_kinematic(w, w.obstruction, lerp(w.obstruction.offset_from, to.obstruction, f));
+    apply_quadratic_drag(w);
     // Stage 2: integrate. maxSubSteps = 0 makes Bullet step exactly dt (no
     // fixed-step accumulator that could drop or add time).
     w.world.stepSimulation(btScalar(w.dt_engine), 0, btScalar(w.dt_engine));
