@@ -2,6 +2,11 @@
 
 #include "common/random.hpp"
 
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+#include <boost/math/special_functions/beta.hpp>
+#include <boost/math/special_functions/gamma.hpp>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -12,17 +17,7 @@
 namespace gapflow {
 
 double student_t_975(std::size_t df) {
-  // Exact table for small df (standard values); Cornish-Fisher expansion beyond
-  // (error < 1e-4 for df > 30).
-  static const double table[] = {0,      12.7062, 4.3027, 3.1824, 2.7764, 2.5706, 2.4469, 2.3646,
-                                 2.3060, 2.2622,  2.2281, 2.2010, 2.1788, 2.1604, 2.1448, 2.1314,
-                                 2.1199, 2.1098,  2.1009, 2.0930, 2.0860, 2.0796, 2.0739, 2.0687,
-                                 2.0639, 2.0595,  2.0555, 2.0518, 2.0484, 2.0452, 2.0423};
-  if (df == 0) return INFINITY;
-  if (df <= 30) return table[df];
-  const double z = 1.959963984540054, n = static_cast<double>(df);
-  const double z3 = z * z * z, z5 = z3 * z * z;
-  return z + (z3 + z) / (4 * n) + (5 * z5 + 16 * z3 + 3 * z) / (96 * n * n);
+  return df == 0 ? INFINITY : student_t_quantile(0.975, static_cast<double>(df));
 }
 
 Summary summarize(const std::vector<double>& v) {
@@ -39,82 +34,21 @@ Summary summarize(const std::vector<double>& v) {
 }
 
 // ===========================================================================
-// Special functions
+// Special functions: Boost.Math, behind argument checks that keep this file's
+// documented edge cases (statistics.hpp); the policy is the safety net below them.
 namespace {
 
-constexpr double kEps = 1e-15;
-constexpr double kTiny = 1e-300;
-constexpr int kMaxIter = 10000;
+namespace bmp = boost::math::policies;
+// Boost's default policy throws std::domain_error / std::overflow_error. Here a domain
+// or pole error gives NaN and an overflow +-inf, as these functions always did (callers
+// test for NaN, not for exceptions). evaluation_error (a series that did not converge:
+// a bug, not a bad argument) keeps Boost's default and throws boost::math::evaluation_error.
+using Policy = bmp::policy<bmp::domain_error<bmp::ignore_error>, bmp::pole_error<bmp::ignore_error>,
+                           bmp::overflow_error<bmp::ignore_error>>;
 
-// Bisection for an increasing function f: the x in [lo, hi] with f(x) = target.
-// Slow but cannot diverge; 200 halvings exhaust double precision.
-template <class F>
-double invert_increasing(F f, double target, double lo, double hi) {
-  for (int i = 0; i < 200 && hi - lo > 1e-13 * std::max(1.0, std::abs(hi)); ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (f(mid) < target ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
-// P(a, x) by its series: e^-x x^a / Gamma(a) * sum_n x^n / (a (a+1) ... (a+n)).
-double gamma_p_series(double a, double x) {
-  double term = 1.0 / a, sum = term;
-  for (int n = 1; n < kMaxIter; ++n) {
-    term *= x / (a + n);
-    sum += term;
-    if (std::abs(term) < std::abs(sum) * kEps) break;
-  }
-  return sum * std::exp(-x + a * std::log(x) - std::lgamma(a));
-}
-
-// Q(a, x) by its continued fraction, evaluated with the modified Lentz method:
-// Q = e^-x x^a / Gamma(a) * 1/(x+1-a- 1(1-a)/(x+3-a- 2(2-a)/(x+5-a- ...))).
-double gamma_q_fraction(double a, double x) {
-  double b = x + 1.0 - a, c = 1.0 / kTiny, d = 1.0 / b, h = d;
-  for (int i = 1; i < kMaxIter; ++i) {
-    const double an = -i * (i - a);
-    b += 2.0;
-    d = an * d + b;
-    if (std::abs(d) < kTiny) d = kTiny;
-    c = b + an / c;
-    if (std::abs(c) < kTiny) c = kTiny;
-    d = 1.0 / d;
-    const double delta = d * c;
-    h *= delta;
-    if (std::abs(delta - 1.0) < kEps) break;
-  }
-  return std::exp(-x + a * std::log(x) - std::lgamma(a)) * h;
-}
-
-// Continued fraction of the incomplete beta (A&S 26.5.8), modified Lentz:
-// coefficients d_{2m+1} = -(a+m)(a+b+m)x / ((a+2m)(a+2m+1)), d_{2m} = m(b-m)x / ((a+2m-1)(a+2m)).
-double beta_fraction(double x, double a, double b) {
-  double c = 1.0, d = 1.0 - (a + b) * x / (a + 1.0);
-  if (std::abs(d) < kTiny) d = kTiny;
-  d = 1.0 / d;
-  double h = d;
-  for (int m = 1; m < kMaxIter; ++m) {
-    const double m2 = 2.0 * m;
-    double coef = m * (b - m) * x / ((a + m2 - 1.0) * (a + m2));
-    d = 1.0 + coef * d;
-    if (std::abs(d) < kTiny) d = kTiny;
-    c = 1.0 + coef / c;
-    if (std::abs(c) < kTiny) c = kTiny;
-    d = 1.0 / d;
-    h *= d * c;
-    coef = -(a + m) * (a + b + m) * x / ((a + m2) * (a + m2 + 1.0));
-    d = 1.0 + coef * d;
-    if (std::abs(d) < kTiny) d = kTiny;
-    c = 1.0 + coef / c;
-    if (std::abs(c) < kTiny) c = kTiny;
-    d = 1.0 / d;
-    const double delta = d * c;
-    h *= delta;
-    if (std::abs(delta - 1.0) < kEps) break;
-  }
-  return h;
-}
+using Normal = boost::math::normal_distribution<double, Policy>;
+using ChiSquared = boost::math::chi_squared_distribution<double, Policy>;
+using StudentT = boost::math::students_t_distribution<double, Policy>;
 
 }  // namespace
 
@@ -122,24 +56,23 @@ double regularized_gamma_p(double a, double x) {
   if (!(a > 0) || x < 0 || std::isnan(x)) return kNaN;
   if (x == 0) return 0.0;
   if (std::isinf(x)) return 1.0;
-  return x < a + 1.0 ? gamma_p_series(a, x) : 1.0 - gamma_q_fraction(a, x);
+  return boost::math::gamma_p(a, x, Policy());
 }
 
 double regularized_beta(double x, double a, double b) {
   if (!(a > 0) || !(b > 0) || !(x >= 0) || !(x <= 1)) return kNaN;
   if (x == 0 || x == 1) return x;
-  const double front =
-      std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x));
-  // The fraction converges quickly for x < (a+1)/(a+b+2); use the symmetry otherwise.
-  if (x < (a + 1.0) / (a + b + 2.0)) return front * beta_fraction(x, a, b) / a;
-  return 1.0 - front * beta_fraction(1.0 - x, b, a) / b;
+  return boost::math::ibeta(a, b, x, Policy());
 }
 
-double normal_cdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+double normal_cdf(double z) {
+  if (std::isnan(z)) return kNaN;
+  return boost::math::cdf(Normal(), z);
+}
 
 double normal_quantile(double p) {
   if (!(p > 0) || !(p < 1)) return p == 0 ? -INFINITY : (p == 1 ? INFINITY : kNaN);
-  return invert_increasing(normal_cdf, p, -40.0, 40.0);
+  return boost::math::quantile(Normal(), p);
 }
 
 double chi_square_cdf(double x, double dof) {
@@ -151,30 +84,18 @@ double chi_square_quantile(double p, double dof) {
   if (!(dof > 0) || !(p >= 0) || !(p <= 1)) return kNaN;
   if (p == 0) return 0.0;
   if (p == 1) return INFINITY;
-  // Wilson & Hilferty (1931): (X/nu)^(1/3) is nearly normal with mean 1 - 2/(9 nu)
-  // and variance 2/(9 nu). It brackets the root; bisection on the exact CDF finishes.
-  const double v = 2.0 / (9.0 * dof);
-  const double wh = dof * std::pow(std::max(0.0, 1.0 - v + normal_quantile(p) * std::sqrt(v)), 3.0);
-  double hi = std::max({2.0 * wh, dof + 10.0 * std::sqrt(2.0 * dof), 10.0});
-  while (chi_square_cdf(hi, dof) < p) hi *= 2.0;
-  return invert_increasing([dof](double x) { return chi_square_cdf(x, dof); }, p, 0.0, hi);
+  return boost::math::quantile(ChiSquared(dof), p);
 }
 
 double student_t_cdf(double t, double dof) {
   if (!(dof > 0) || std::isnan(t)) return kNaN;
   if (std::isinf(t)) return t > 0 ? 1.0 : 0.0;
-  // P(|T| > |t|) = I_{nu/(nu+t^2)}(nu/2, 1/2)  (A&S 26.7.1 with 26.5.27)
-  const double tail = 0.5 * regularized_beta(dof / (dof + t * t), 0.5 * dof, 0.5);
-  return t > 0 ? 1.0 - tail : tail;
+  return boost::math::cdf(StudentT(dof), t);
 }
 
 double student_t_quantile(double p, double dof) {
   if (!(dof > 0) || !(p > 0) || !(p < 1)) return kNaN;
-  double hi = 10.0;
-  while (student_t_cdf(hi, dof) < p) hi *= 2.0;
-  double lo = -10.0;
-  while (student_t_cdf(lo, dof) > p) lo *= 2.0;
-  return invert_increasing([dof](double t) { return student_t_cdf(t, dof); }, p, lo, hi);
+  return boost::math::quantile(StudentT(dof), p);
 }
 
 // ===========================================================================

@@ -6,8 +6,8 @@
 //
 // Contents
 //   * Student-t summary (summarize, student_t_975)              -- mean +- t s/sqrt(n)
-//   * special functions: regularized gamma/beta, chi-square and Student-t
-//     distribution and quantile functions, normal quantile
+//   * special functions (Boost.Math): regularized gamma/beta, normal, chi-square and
+//     Student-t distribution and quantile functions
 //   * describe(): mean + Student-t + bootstrap interval, median, and the paper's
 //     "drop beyond 2 sigma" mean, side by side (never one silently chosen)
 //   * censored exponential/geometric mean with the exact chi-square interval,
@@ -39,30 +39,32 @@ struct Summary {
   double se() const { return n > 0 ? sd / std::sqrt(static_cast<double>(n)) : 0.0; }
 };
 
-// Two-sided 97.5 % quantile of Student's t with `df` degrees of freedom.
+// Two-sided 95 % (one-sided 97.5 %) quantile of Student's t with `df` degrees of freedom:
+// student_t_quantile(0.975, df); +inf for df = 0.
 double student_t_975(std::size_t df);
 
 Summary summarize(const std::vector<double>& values);
 
 // ---------------------------------------------------------------------------
-// Special functions and distributions.
+// Special functions and distributions, computed by Boost.Math (libboost-math-dev; its
+// gamma_p, ibeta and the normal, chi_squared and students_t distributions), accurate to a
+// few ulp over the whole range (large a or dof, p within 1e-300 of 0). Bad arguments give
+// NaN, never an exception: each function checks its arguments as documented here, and the
+// Boost error policy behind it turns a domain error into NaN and an overflow into +-inf.
 //
-// Regularized lower incomplete gamma P(a, x) = gamma(a, x)/Gamma(a), a > 0, x >= 0:
-// power series for x < a + 1, continued fraction for Q = 1 - P otherwise
-// (Abramowitz & Stegun 6.5.29 and 6.5.31; both converge fast in their range).
+// Regularized lower incomplete gamma P(a, x) = gamma(a, x)/Gamma(a), a > 0, x >= 0
+// (0 at x = 0, 1 at x = +inf; NaN for a <= 0, x < 0 or NaN).
 double regularized_gamma_p(double a, double x);
-// Regularized incomplete beta I_x(a, b), by its continued fraction
-// (A&S 26.5.8), using I_x(a,b) = 1 - I_{1-x}(b,a) where it converges slowly.
+// Regularized incomplete beta I_x(a, b), a, b > 0, x in [0, 1] (NaN otherwise).
 double regularized_beta(double x, double a, double b);
 
-double normal_cdf(double z);
-double normal_quantile(double p);                    // p in (0, 1)
-double chi_square_cdf(double x, double dof);         // P(dof/2, x/2)
-// Inverse of chi_square_cdf; Wilson-Hilferty start, then bisection on the exact
-// CDF to 1e-12 relative (so it is exact to table precision for any dof > 0).
+double normal_cdf(double z);                         // NaN for NaN
+double normal_quantile(double p);                    // p in (0, 1); -inf at 0, +inf at 1, else NaN
+double chi_square_cdf(double x, double dof);         // P(dof/2, x/2); 0 for x <= 0 (whatever dof)
+// Inverse of chi_square_cdf, p in [0, 1] (0 at 0, +inf at 1); NaN for dof <= 0 or p outside.
 double chi_square_quantile(double p, double dof);
-double student_t_cdf(double t, double dof);           // any real dof > 0
-double student_t_quantile(double p, double dof);      // inverse of student_t_cdf
+double student_t_cdf(double t, double dof);           // any real dof > 0 (NaN otherwise)
+double student_t_quantile(double p, double dof);      // inverse of student_t_cdf; p in (0, 1) open, else NaN
 
 // ---------------------------------------------------------------------------
 // Descriptive statistics of one sample (e.g. J of n runs).

@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 
 packages=(
   build-essential cmake pkg-config
-  libbox2d-dev libbullet-dev libeigen3-dev libnlopt-cxx-dev
+  libbox2d-dev libbullet-dev libeigen3-dev libboost-math-dev libnlopt-cxx-dev
   libgtest-dev libbenchmark-dev libbenchmark-tools
   libtomlplusplus-dev libcli11-dev libsqlite3-dev libfmt-dev libtbb-dev
   python3 python3-matplotlib

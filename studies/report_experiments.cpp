@@ -1,6 +1,8 @@
 // The experiment analyses of the report (numbers only; report_sections.cpp words them).
 #include "studies/report.hpp"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -126,28 +128,31 @@ LineFit fit_line(const std::vector<double>& x, const std::vector<double>& y, con
   const bool weighted =
       se.size() == x.size() && std::all_of(se.begin(), se.end(), [](double s) { return std::isfinite(s) && s > 0; });
   f.weighting = weighted ? "interval widths" : "unweighted";
-  double s = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (std::size_t i = 0; i < f.n; ++i) {
-    const double w = weighted ? 1.0 / (se[i] * se[i]) : 1.0;
-    s += w, sx += w * x[i], sy += w * y[i], sxx += w * x[i] * x[i], sxy += w * x[i] * y[i];
+  const auto n = static_cast<Eigen::Index>(f.n);
+  // Design matrix [1 x], weights 1/se^2; normal matrix A = X^T W X, its inverse the covariance.
+  Eigen::MatrixX2d design(n, 2);
+  Eigen::VectorXd w(n), yv(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    design.row(i) << 1.0, x[k];
+    w[i] = weighted ? 1.0 / (se[k] * se[k]) : 1.0;
+    yv[i] = y[k];
   }
-  const double delta = s * sxx - sx * sx;
-  if (f.n < 2 || !(delta > 1e-12 * s * sxx)) return f;  // fewer than two distinct x
-  f.slope = (s * sxy - sx * sy) / delta;
-  f.intercept = (sxx * sy - sx * sxy) / delta;
+  const Eigen::Matrix2d a = design.transpose() * w.asDiagonal() * design;
+  if (f.n < 2 || !(a.determinant() > 1e-12 * a(0, 0) * a(1, 1))) return f;  // fewer than two distinct x
+  const Eigen::Matrix2d cov = a.inverse();
+  const Eigen::Vector2d coef = cov * (design.transpose() * w.asDiagonal() * yv);
+  f.intercept = coef[0];
+  f.slope = coef[1];
   f.ok = true;
   if (f.n < 3) return f;  // exact through two points: no scatter left to estimate intervals
-  double chi2 = 0;
-  for (std::size_t i = 0; i < f.n; ++i) {
-    const double r = y[i] - f.intercept - f.slope * x[i];
-    chi2 += (weighted ? 1.0 / (se[i] * se[i]) : 1.0) * r * r;
-  }
+  const Eigen::VectorXd r = yv - design * coef;
   const double dof = static_cast<double>(f.n - 2);
-  f.chi2_per_dof = chi2 / dof;
+  f.chi2_per_dof = r.dot(w.asDiagonal() * r) / dof;
   // Weighted: trust the se unless the scatter says they are too small (as fit_beverloo does).
   const double scale = weighted ? std::max(1.0, f.chi2_per_dof) : f.chi2_per_dof;
   const double t = student_t_quantile(0.975, dof);
-  const double se_slope = std::sqrt(scale * s / delta), se_icpt = std::sqrt(scale * sxx / delta);
+  const double se_slope = std::sqrt(scale * cov(1, 1)), se_icpt = std::sqrt(scale * cov(0, 0));
   f.slope_ci = {f.slope - t * se_slope, f.slope + t * se_slope};
   f.intercept_ci = {f.intercept - t * se_icpt, f.intercept + t * se_icpt};
   return f;

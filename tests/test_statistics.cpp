@@ -70,6 +70,62 @@ TEST(Distributions, NormalAndStudentTMatchTables) {
   EXPECT_NEAR(2 * student_t_cdf(-1.5, 3.5), 0.217818187, 1e-8);
 }
 
+// Where the former hand-written code (series, continued fractions, bisection to 1e-13
+// absolute) was off: large a or dof, p near 0 or 1. References: closed forms, or mpmath
+// 1.3 at 60 digits (e.g. `mpmath.gammainc(1e6, 0, 1e6, regularized=True)`, Student t as
+// 1 - betainc(nu/2, 1/2, 0, nu/(nu+t^2))/2). The old code fails every line marked *.
+TEST(Distributions, StayAccurateAtExtremeArguments) {
+  // Large a: P(a, a) = 1/2 + 1/(3 sqrt(2 pi a)) + O(a^-3/2) (Temme). Old: 0.341 at a = 1e8 *.
+  EXPECT_NEAR(regularized_gamma_p(1e6, 1e6), 0.50013298076087265, 1e-14);  // * (off 3e-10)
+  EXPECT_NEAR(regularized_gamma_p(1e8, 1e8), 0.5 + 1.0 / (3.0 * std::sqrt(2.0 * M_PI * 1e8)), 1e-12);  // *
+  // Large dof: t -> normal, but not exactly (mpmath at nu = 1e10).
+  EXPECT_NEAR(student_t_cdf(-2.0, 1e10), 0.022750131961676946, 1e-16);  // * (off 2e-10)
+  EXPECT_NEAR(student_t_quantile(0.975, 1e10), 1.959963984777281, 1e-13);  // * (off 4e-7)
+  // p near 0 and 1. Chi-square with 2 dof is exponential of mean 2: x_p = -2 ln(1 - p).
+  for (double p : {1e-15, 1e-8, 1.0 - 1e-12}) {
+    const double exact = -2.0 * std::log1p(-p);
+    EXPECT_NEAR(chi_square_quantile(p, 2.0), exact, 1e-13 * exact) << p;  // * at 1e-15 (absolute 1e-13 tolerance)
+  }
+  // Student t with 2 dof: t_p = (2p - 1)/sqrt(2 p (1 - p)); Cauchy (1 dof): t_p = -1/tan(pi p).
+  for (double p : {1e-12, 1e-6, 1.0 - 1e-12}) {
+    const double exact = (2 * p - 1) / std::sqrt(2 * p * (1 - p));
+    EXPECT_NEAR(student_t_quantile(p, 2.0), exact, 1e-12 * std::abs(exact)) << p;  // * at 1 - 1e-12
+  }
+  EXPECT_NEAR(student_t_quantile(1e-10, 1.0), -1.0 / std::tan(M_PI * 1e-10), 1e-12 * 3.2e9);
+  EXPECT_NEAR(normal_quantile(1e-300), -37.047096299361199, 1e-12);  // mpmath: sqrt(2) erfinv(2p - 1)
+  EXPECT_NEAR(normal_quantile(1.0 - 1e-12), 7.0344869100478356, 1e-9);  // * (off 8e-6; p is 1 - 1e-12 rounded)
+  // student_t_975 against the exact quantile (mpmath), where its old table and expansion
+  // (4 decimals) were coarse.
+  EXPECT_NEAR(student_t_975(10), 2.2281388519862747, 1e-12);
+  EXPECT_NEAR(student_t_975(31), 2.0395134463964085, 1e-12);
+}
+
+// Bad arguments give NaN (or the documented limit), never an exception.
+TEST(Distributions, BadArgumentsGiveNaNNotExceptions) {
+  EXPECT_NO_THROW({
+    EXPECT_TRUE(std::isnan(student_t_quantile(0.0, 3)));
+    EXPECT_TRUE(std::isnan(student_t_quantile(1.0, 3)));
+    EXPECT_TRUE(std::isnan(student_t_quantile(0.5, 0)));
+    EXPECT_TRUE(std::isnan(student_t_cdf(1.0, -1)));
+    EXPECT_TRUE(std::isnan(chi_square_quantile(0.5, 0)));
+    EXPECT_TRUE(std::isnan(chi_square_quantile(1.5, 3)));
+    EXPECT_TRUE(std::isnan(chi_square_cdf(1.0, 0)));
+    EXPECT_TRUE(std::isnan(regularized_gamma_p(0.0, 1.0)));
+    EXPECT_TRUE(std::isnan(regularized_gamma_p(1.0, -1.0)));
+    EXPECT_TRUE(std::isnan(regularized_beta(1.5, 1, 1)));
+    EXPECT_TRUE(std::isnan(regularized_beta(0.5, 0, 1)));
+    EXPECT_TRUE(std::isnan(normal_quantile(2.0)));
+    EXPECT_TRUE(std::isnan(normal_cdf(kNaN)));
+  });
+  EXPECT_EQ(normal_quantile(0.0), -INFINITY);
+  EXPECT_EQ(normal_quantile(1.0), INFINITY);
+  EXPECT_EQ(chi_square_quantile(0.0, 3), 0.0);
+  EXPECT_EQ(chi_square_quantile(1.0, 3), INFINITY);
+  EXPECT_EQ(chi_square_cdf(-1.0, -1.0), 0.0);
+  EXPECT_EQ(student_t_cdf(INFINITY, 3), 1.0);
+  EXPECT_EQ(student_t_975(0), INFINITY);
+}
+
 // ---------------------------------------------------------------------------
 // One sample: bootstrap interval, median, 2-sigma rule.
 
