@@ -178,39 +178,20 @@ struct PlacedShape {
   btTransform pose;
 };
 
-PlacedShape make_hull_prism(const std::vector<Point2>& shrunk, double z0, double z1, double margin);
-
-// Right prism over a convex polygon (engine units), from z0 to z1.
-PlacedShape make_prism(const std::vector<Point2>& poly, double z0, double z1, double margin) {
+// A prism's pose: centred on the mean of `poly`'s vertices, halfway between z0 and z1.
+PlacedShape prism_at(const std::vector<Point2>& poly, double z0, double z1) {
   double cx = 0, cy = 0;
   for (Point2 p : poly) cx += p.x / poly.size(), cy += p.y / poly.size();
-  const double zc = (z0 + z1) / 2, hz = (z1 - z0) / 2;
   PlacedShape out;
   out.pose.setIdentity();
-  out.pose.setOrigin(btVector3(cx, cy, zc));
-  if (is_rectangle(poly)) {
-    // A box: exact sphere-box contacts, robust against deep penetration.
-    const double ex = poly[1].x - poly[0].x, ey = poly[1].y - poly[0].y;
-    const double len0 = std::hypot(ex, ey);
-    const double len1 = std::hypot(poly[2].x - poly[1].x, poly[2].y - poly[1].y);
-    auto box = std::make_unique<btBoxShape>(btVector3(len0 / 2, len1 / 2, hz));
-    box->setMargin(margin);  // btBoxShape keeps its outer extents when the margin changes
-    out.pose.setRotation(btQuaternion(btVector3(0, 0, 1), std::atan2(ey, ex)));
-    out.shape = std::move(box);
-    return out;
-  }
-  return make_hull_prism(shrink_convex(poly, margin), z0, z1, margin);
+  out.pose.setOrigin(btVector3(cx, cy, (z0 + z1) / 2));
+  return out;
 }
 
-// Prism over a polygon already moved inward by `margin` (engine units): Bullet's hull plus
-// its margin is that polygon Minkowski-summed with a disc of radius margin.
-PlacedShape make_hull_prism(const std::vector<Point2>& shrunk, double z0, double z1, double margin) {
-  double cx = 0, cy = 0;
-  for (Point2 p : shrunk) cx += p.x / shrunk.size(), cy += p.y / shrunk.size();
-  const double zc = (z0 + z1) / 2, hz = (z1 - z0) / 2;
-  PlacedShape out;
-  out.pose.setIdentity();
-  out.pose.setOrigin(btVector3(cx, cy, zc));
+// Fills `out` (posed by prism_at) with the hull over a polygon already moved inward by
+// `margin`: Bullet's hull plus its margin is that polygon Minkowski-summed with a disc.
+PlacedShape hull_prism(PlacedShape out, const std::vector<Point2>& shrunk, double z0, double z1, double margin) {
+  const double cx = out.pose.getOrigin().x(), cy = out.pose.getOrigin().y(), hz = (z1 - z0) / 2;
   auto hull = std::make_unique<btConvexHullShape>();
   for (Point2 p : shrunk) {
     hull->addPoint(btVector3(p.x - cx, p.y - cy, -hz + margin), false);
@@ -220,6 +201,23 @@ PlacedShape make_hull_prism(const std::vector<Point2>& shrunk, double z0, double
   hull->setMargin(margin);
   out.shape = std::move(hull);
   return out;
+}
+
+// Right prism over a convex polygon (engine units), from z0 to z1.
+PlacedShape make_prism(const std::vector<Point2>& poly, double z0, double z1, double margin) {
+  PlacedShape out = prism_at(poly, z0, z1);
+  if (is_rectangle(poly)) {
+    // A box: exact sphere-box contacts, robust against deep penetration.
+    const double ex = poly[1].x - poly[0].x, ey = poly[1].y - poly[0].y;
+    const double len0 = std::hypot(ex, ey);
+    const double len1 = std::hypot(poly[2].x - poly[1].x, poly[2].y - poly[1].y);
+    auto box = std::make_unique<btBoxShape>(btVector3(len0 / 2, len1 / 2, (z1 - z0) / 2));
+    box->setMargin(margin);  // btBoxShape keeps its outer extents when the margin changes
+    out.pose.setRotation(btQuaternion(btVector3(0, 0, 1), std::atan2(ey, ex)));
+    out.shape = std::move(box);
+    return out;
+  }
+  return hull_prism(std::move(out), shrink_convex(poly, margin), z0, z1, margin);
 }
 
 std::vector<Point2> to_engine(const ConvexPolygon& p, const EngineScaling& s) {
@@ -408,7 +406,8 @@ void add_obstruction(World3D& w, const CompiledScenario& sc) {
     // then the core is moved in by the difference first.
     const double r = w.scale.to_engine_length(g.corner_radius), rounding = std::max(r, margin);
     const ConvexPolygon core = inward_offset(g.polygon, w.scale.to_lab_length(rounding - r));
-    placed = make_hull_prism(to_engine(core, w.scale), z0, z1, rounding);
+    const std::vector<Point2> core_e = to_engine(core, w.scale);
+    placed = hull_prism(prism_at(core_e, z0, z1), core_e, z0, z1, rounding);
   } else {
     placed = make_prism(to_engine(g.polygon, w.scale), z0, z1, margin);
   }

@@ -313,15 +313,22 @@ TEST(CornerRadius, InwardOffsetDropsVanishingEdgesAndInradiusIsTheLargestDisc) {
   EXPECT_TRUE(inward_offset(tri, 1.01 * rho).vertices.empty());
 }
 
+// A, corners rounded with r = 2 mm, 200 mm up the board; the core's apex (uphill corner).
+const std::vector<std::string> kRoundedAUphill = {"obstruction.shape=\"A\"", "obstruction.distance_mm=200.0",
+                                                  "obstruction.corner_radius_mm=2.0"};
+Vec2 core_apex(const CompiledScenario& sc) {
+  Vec2 apex{0, 0};
+  for (Vec2 p : sc.obstruction.polygon.vertices)
+    if (p.y > apex.y) apex = p;
+  return apex;
+}
+
 // A disc resting on the rounded apex of an A (pointing uphill, away from the gap) sits at
 // distance r + R from the core's apex (Box2D's polygon skin m_radius = r).
 TEST(CornerRadius, DiscRestsOnARoundedCornerAtRPlusItsRadius2D) {
   const double r = 2e-3;
-  const CompiledScenario sc = one_particle({"obstruction.shape=\"A\"", "obstruction.distance_mm=200.0",
-                                            "obstruction.corner_radius_mm=2.0"});
-  Vec2 apex{0, 0};
-  for (Vec2 p : sc.obstruction.polygon.vertices)
-    if (p.y > apex.y) apex = p;
+  const CompiledScenario sc = one_particle(kRoundedAUphill);
+  const Vec2 apex = core_apex(sc);
   const double R = sc.particles[0].diameter / 2;
   Session2D s(sc);
   launch2d(s, {apex.x, apex.y + r + R + 0.2e-3}, {0, 0});
@@ -335,11 +342,8 @@ TEST(CornerRadius, DiscRestsOnARoundedCornerAtRPlusItsRadius2D) {
 // The same in 3D: Bullet's hull of the core with margin r.
 TEST(CornerRadius, SphereRestsOnARoundedCornerAtRPlusItsRadius3D) {
   const double r = 2e-3;
-  const CompiledScenario sc = one_particle({"obstruction.shape=\"A\"", "obstruction.distance_mm=200.0",
-                                            "obstruction.corner_radius_mm=2.0"});
-  Vec2 apex{0, 0};
-  for (Vec2 p : sc.obstruction.polygon.vertices)
-    if (p.y > apex.y) apex = p;
+  const CompiledScenario sc = one_particle(kRoundedAUphill);
+  const Vec2 apex = core_apex(sc);
   Session3D s(sc);
   const double R = s.radius(0);
   s.place(0, {apex.x, apex.y + r + R + 0.2e-3, R});
