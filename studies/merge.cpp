@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <map>
+#include <set>
 #include <stdexcept>
 
 namespace gapflow {
@@ -43,7 +44,7 @@ MergeSummary merge_stores(Store& out, const std::vector<std::filesystem::path>& 
   for (const auto& s : sources)
     if (!std::filesystem::is_regular_file(s)) throw std::invalid_argument("merge: no results store at " + s.string());
   MergeSummary summary;
-  std::map<std::string, StoredRun> stored = by_key(out.load());
+  std::set<std::string> stored = out.keys();  // runs are read back only where a key collides
   std::map<std::string, PlannedJob> plan;
   for (PlannedJob& p : out.plan()) plan.emplace(p.id.key, std::move(p));
   std::map<std::string, bool> has_study_file;
@@ -55,19 +56,18 @@ MergeSummary merge_stores(Store& out, const std::vector<std::filesystem::path>& 
     std::vector<StoredRun> batch;
     std::vector<Provenance> batch_provenance;
     for (StoredRun& run : in.load()) {
-      auto it = stored.find(run.id.key);
-      if (it != stored.end()) {
-        if (std::string d = run_difference(it->second, run); !d.empty())
+      if (stored.count(run.id.key)) {
+        if (std::string d = run_difference(*out.load_run(run.id.key), run); !d.empty())
           summary.conflicts.push_back({run.id.key, source, d});
         else
           ++summary.identical;
         continue;
       }
       batch_provenance.push_back(provenance_of(run, known, source));
-      stored.emplace(run.id.key, run);
+      stored.insert(run.id.key);
       batch.push_back(std::move(run));
     }
-    out.import_runs(batch, batch_provenance);
+    out.import_runs(batch, batch_provenance);  // before the next source, which may collide with these
     summary.added += static_cast<int>(batch.size());
     for (PlannedJob& p : in.plan()) plan.emplace(p.id.key, std::move(p));
     for (const StudyFileRecord& f : in.study_files())

@@ -370,14 +370,25 @@ void Store::put(const JobIdentity& id, const RunRecord& r) {
 }
 
 std::vector<StoredRun> Store::load(const std::optional<std::string>& study) const {
+  return select_runs("?1 IS NULL OR study = ?1", study);
+}
+
+std::optional<StoredRun> Store::load_run(const std::string& key) const {
+  std::vector<StoredRun> runs = select_runs("job_key = ?1", key);
+  if (runs.empty()) return std::nullopt;
+  return std::move(runs.front());
+}
+
+std::vector<StoredRun> Store::select_runs(const char* where, const std::optional<std::string>& arg) const {
   std::lock_guard lock(mutex_);
-  Statement s(db_, R"sql(SELECT
+  const std::string sql = fmt::format(R"sql(SELECT
       job_key, study, series, point, point_label, axes_json, model, replicate, base_seed, run_seed,
       scenario_hash, scenario_name, code_version, particles, passed, reinjected, perturbations, escaped,
       max_conservation_error, sim_time_s, wall_time_s, end_reason, regime, j_paper, j_flowing, j_mid,
       diameter_m, gap_m, distance_m, incline_rad, time_step_s, finished_at
-    FROM runs WHERE ?1 IS NULL OR study = ?1 ORDER BY job_key)sql");
-  if (study) s.bind(1, *study);
+    FROM runs WHERE {} ORDER BY job_key)sql", where);
+  Statement s(db_, sql.c_str());
+  if (arg) s.bind(1, *arg);
   std::vector<StoredRun> out;
   while (s.step()) {
     StoredRun run;

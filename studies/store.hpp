@@ -93,6 +93,8 @@ class Store {
 
   // Every stored run (of one study, when given), in job-key order.
   std::vector<StoredRun> load(const std::optional<std::string>& study = std::nullopt) const;
+  // One stored run by job key (a merge compares runs of one key without loading the whole store).
+  std::optional<StoredRun> load_run(const std::string& key) const;
 
   // Keep (or replace) the study file of `study`: the last one run is the one recorded.
   void record_study_file(const std::string& study, const std::string& source, const std::string& text);
@@ -103,6 +105,8 @@ class Store {
   static const std::vector<std::string>& tables();  // runs, crossings, avalanches, clogs, study_files, provenance, plan
 
  private:
+  std::vector<StoredRun> select_runs(const char* where, const std::optional<std::string>& arg) const;
+
   sqlite3* db_ = nullptr;
   mutable std::mutex mutex_;
   std::string shard_;
