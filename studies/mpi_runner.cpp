@@ -12,7 +12,6 @@
 #include <chrono>
 #include <map>
 #include <ostream>
-#include <set>
 #include <thread>
 #endif
 
@@ -133,12 +132,7 @@ RunnerSummary MpiSession::run_jobs(const std::vector<Job>& jobs, Store& store, c
     throw std::invalid_argument("--mpi needs at least 2 ranks (rank 0 hands out jobs, the others simulate): "
                                 "mpirun -np 3 gapflow study ... --mpi");
   RunnerSummary summary;
-  summary.total = static_cast<int>(jobs.size());
-  const std::set<std::string> stored = store.keys();
-  std::vector<const Job*> todo;
-  for (const Job& j : jobs)
-    if (!stored.count(j.id.key)) todo.push_back(&j);
-  summary.already_stored = summary.total - static_cast<int>(todo.size());
+  const std::vector<const Job*> todo = jobs_to_run(jobs, store, summary);
   auto cancelled = [&] { return options.cancel && options.cancel->load(); };
 
   std::size_t next = 0;

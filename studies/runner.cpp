@@ -90,14 +90,19 @@ bool cancelled(const std::atomic<bool>* cancel) { return cancel && cancel->load(
 
 }  // namespace
 
-RunnerSummary run_jobs(const std::vector<Job>& jobs, Store& store, const RunnerOptions& options) {
-  RunnerSummary summary;
+std::vector<const Job*> jobs_to_run(const std::vector<Job>& jobs, const Store& store, RunnerSummary& summary) {
   summary.total = static_cast<int>(jobs.size());
   const std::set<std::string> stored = store.keys();
   std::vector<const Job*> todo;
   for (const Job& j : jobs)
     if (!stored.count(j.id.key)) todo.push_back(&j);
   summary.already_stored = summary.total - static_cast<int>(todo.size());
+  return todo;
+}
+
+RunnerSummary run_jobs(const std::vector<Job>& jobs, Store& store, const RunnerOptions& options) {
+  RunnerSummary summary;
+  const std::vector<const Job*> todo = jobs_to_run(jobs, store, summary);
 
   const auto run = options.run ? options.run : run_job;
   std::mutex mutex;  // guards summary.failed, finished_workers; signals the progress loop

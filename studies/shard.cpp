@@ -97,7 +97,10 @@ void write_plan(std::ostream& out, const std::vector<Job>& jobs, int count, cons
     if (only && shard_of[i] != only->index) continue;
     const JobIdentity& id = jobs[i].id;
     std::string set;
-    for (const std::string& o : jobs[i].overrides) set += (set.empty() ? "" : ",") + json_string(o);
+    for (const std::string& o : jobs[i].overrides) {
+      if (!set.empty()) set += ',';
+      set += json_string(o);
+    }
     out << fmt::format(
         "{{\"key\":\"{}\",\"shard\":\"{}/{}\",\"expected_cost\":{},\"study\":{},\"series\":{},\"point\":{},"
         "\"point_label\":{},\"axes\":{},\"model\":\"{}\",\"replicate\":{},\"run_seed\":\"{:016x}\","
