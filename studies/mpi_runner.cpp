@@ -22,7 +22,7 @@ namespace gapflow {
 bool mpi_available() { return false; }
 MpiSession::MpiSession() {
   throw std::invalid_argument(
-      "--mpi: this gapflow was built without MPI (CMake found none): install libopenmpi-dev and openmpi-bin "
+      "--mpi: this gapflow was built without MPI (CMake found none, or GAPFLOW_WITH_MPI=OFF): install libopenmpi-dev and openmpi-bin "
       "(scripts/setup.sh) and rebuild, or run the study with --shard I/K or `gapflow slurm`");
 }
 MpiSession::~MpiSession() = default;

@@ -239,6 +239,22 @@ TEST(ClusterMerge, AHalfFinishedSetSaysWhatIsMissing) {
   std::sort(expected.begin(), expected.end());
   EXPECT_EQ(missing, expected);
   EXPECT_THROW(merge_stores(merged, {dir / "no-such.sqlite"}), std::invalid_argument);
+
+  // Share 2 dies half-way (its runs fail after the first two), then resumes; share 3 runs: complete.
+  RunnerOptions dying = fake_runner();
+  int calls = 0;
+  dying.run = [&](const Job& job, const std::atomic<bool>*) {
+    if (++calls > 2) throw std::runtime_error("node lost");
+    return fake_record(job);
+  };
+  const fs::path two = run_share(dir, jobs, {2, 3}, dying);
+  EXPECT_EQ(merge_stores(merged, {two}).missing.size(), expected.size() - 2);
+  Store resumed(two);
+  const RunnerSummary again = run_jobs(jobs_of_shard(jobs, {2, 3}), resumed, fake_runner());
+  EXPECT_EQ(again.already_stored, 2);
+  const MergeSummary done = merge_stores(merged, {one, two, run_share(dir, jobs, {3, 3}, fake_runner())});
+  EXPECT_TRUE(done.missing.empty());
+  EXPECT_EQ(merged.count(), jobs.size());
 }
 
 TEST(ClusterMerge, ConflictingResultsOrCodeVersionsAreReportedAndNotWritten) {
