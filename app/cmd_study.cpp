@@ -6,7 +6,9 @@
 
 #include "studies/jobs.hpp"
 #include "studies/confirm.hpp"
+#include "studies/mpi_runner.hpp"
 #include "studies/runner.hpp"
+#include "studies/shard.hpp"
 #include "studies/store.hpp"
 #include "studies/study.hpp"
 
@@ -17,7 +19,9 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
+#include <functional>
 #include <map>
+#include <memory>
 #include <thread>
 #include <unistd.h>
 
@@ -27,6 +31,9 @@ struct StudyCommands::Options {
   CLI::App* study = nullptr;
   std::string study_file, db;
   bool quick = false, dry_run = false;
+  bool plan = false, status = false, mpi = false;  // cluster: studies/shard.hpp, merge.hpp, mpi_runner.hpp
+  std::string shard;                               // "I/K": run share I of K only
+  int shards = 1;                                  // K for --plan without --shard
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 
   CLI::App* export_cmd = nullptr;
@@ -37,9 +44,29 @@ namespace {
 
 // --quick has its own store: its screen may confirm other points than the full
 // study's, and those must not pass for the full study's confirmation.
-std::filesystem::path db_path(const StudyCommands::Options& o, const StudyDef& study) {
+// A share of a sharded study has its own store beside the study's: results/<name>/shards/shard-I-of-K.sqlite.
+std::filesystem::path db_path(const StudyCommands::Options& o, const StudyDef& study,
+                              const std::optional<ShardSpec>& shard) {
   if (!o.db.empty()) return o.db;
-  return std::filesystem::path("results") / (o.quick ? study.name + "-quick" : study.name) / "runs.sqlite";
+  const std::filesystem::path folder = std::filesystem::path("results") / (o.quick ? study.name + "-quick" : study.name);
+  if (shard) return folder / "shards" / fmt::format("shard-{}-of-{}.sqlite", shard->index, shard->count);
+  return folder / "runs.sqlite";
+}
+
+// --status: every job of the study (or of the share) by key, done or missing in the store.
+int print_status(const std::vector<Job>& jobs, const std::filesystem::path& db) {
+  std::set<std::string> stored;
+  if (std::filesystem::exists(db)) stored = Store(db).keys();
+  int done = 0;
+  for (const Job& j : jobs) {
+    const bool is_done = stored.count(j.id.key) > 0;
+    done += is_done ? 1 : 0;
+    std::cout << fmt::format("{} {:7s} {} '{}' {} r{}\n", j.id.key, is_done ? "done" : "missing", j.id.series,
+                             j.id.point_label, j.id.model, j.id.replicate);
+  }
+  std::cout << fmt::format("{} of {} jobs done, {} missing (store {})\n", done, jobs.size(), jobs.size() - done,
+                           db.string());
+  return 0;
 }
 
 void print_dry_run(const StudyDef& study, const std::vector<Job>& jobs, const std::filesystem::path& db) {
@@ -66,15 +93,17 @@ void print_dry_run(const StudyDef& study, const std::vector<Job>& jobs, const st
 }
 
 // Screen -> confirm: rank the screened points and run the best again with the confirming model.
+using JobRunner = std::function<RunnerSummary(const std::vector<Job>&, Store&, const RunnerOptions&)>;
+
 RunnerSummary run_confirm_stage(const StudyDef& study, Store& store, const RunnerOptions& options,
-                                RunnerSummary screen) {
+                                RunnerSummary screen, const JobRunner& run) {
   const std::vector<RankedPoint> ranked = rank_screened_points(study, store.load(study.name));
   std::cerr << fmt::format("screen ranking by mean J_{} (best first; the top {} are confirmed with {}):\n",
                            study.confirm.rank_by, study.confirm.top, to_string(study.confirm.model));
   for (size_t i = 0; i < ranked.size() && i < static_cast<size_t>(study.confirm.top) + 5; ++i)
     std::cerr << fmt::format("  {:2d}. {:12s} {:40s} J = {:8.2f} /s ({} runs)\n", i + 1, ranked[i].series,
                              ranked[i].point_label, ranked[i].mean_j, ranked[i].runs);
-  const RunnerSummary c = run_jobs(confirm_jobs(study, ranked), store, options);
+  const RunnerSummary c = run(confirm_jobs(study, ranked), store, options);
   screen.total += c.total;
   screen.already_stored += c.already_stored;
   screen.done_now += c.done_now;
@@ -84,32 +113,61 @@ RunnerSummary run_confirm_stage(const StudyDef& study, Store& store, const Runne
 }
 
 int cmd_study(const StudyCommands::Options& o) {
+  // MPI first: every rank reads the study (a bad one fails on all ranks alike); rank 0 runs it.
+  std::unique_ptr<MpiSession> mpi = o.mpi ? std::make_unique<MpiSession>() : nullptr;
   StudyDef study = load_study(o.study_file);
   if (o.quick && !study.quick.present)  // silently running the full study would be no quick look
     throw ScenarioError({o.study_file, 0, 0}, "", "",
                         "this study has no [quick] table, so no quick variant: run it without --quick, "
                         "or add [quick] with replicates / models / thin");
   if (o.quick) study = apply_quick(std::move(study));
-  const std::vector<Job> jobs = expand_jobs(study);  // every scenario validated before anything runs
-  const std::filesystem::path db = db_path(o, study);
+  const std::optional<ShardSpec> shard = o.shard.empty() ? std::nullopt : std::optional(parse_shard(o.shard));
+  const std::vector<Job> all_jobs = expand_jobs(study);  // every scenario validated before anything runs
+  const std::vector<Job> jobs = shard ? jobs_of_shard(all_jobs, *shard) : all_jobs;
+  const std::filesystem::path db = db_path(o, study, shard);
+  if (o.plan) {
+    write_plan(std::cout, all_jobs, shard ? shard->count : o.shards, shard ? &*shard : nullptr);
+    return 0;
+  }
+  if (o.status) return print_status(jobs, db);
   if (o.dry_run) {
     print_dry_run(study, jobs, db);
+    return 0;
+  }
+  g_cancel.store(false);
+  CancelOnSignal signals;
+  if (mpi && mpi->rank() > 0) {
+    mpi->worker_loop(&g_cancel);
     return 0;
   }
   Store store(db);
   // The report reads the study's [report] settings from the store (gapflow report RESULTS).
   if (const auto text = read_text_file(o.study_file)) store.record_study_file(study.name, o.study_file, *text);
-  std::cerr << fmt::format("study '{}'{}: {} jobs on {} worker threads, store {}\n", study.name,
-                           o.quick ? " (quick)" : "", jobs.size(), o.jobs, db.string());
-  g_cancel.store(false);
-  CancelOnSignal signals;
+  if (shard) {  // the whole job list, so that a merge of the shares can say which jobs are missing
+    store.set_shard(shard->label());
+    store.record_plan(plan_of(all_jobs, shard->count));
+  }
+  std::cerr << fmt::format("study '{}'{}{}: {} jobs on {}, store {}\n", study.name, o.quick ? " (quick)" : "",
+                           shard ? fmt::format(" share {} ({} jobs in all)", shard->label(), all_jobs.size()) : "",
+                           jobs.size(),
+                           mpi ? fmt::format("{} MPI ranks", mpi->size() - 1) : fmt::format("{} worker threads", o.jobs),
+                           db.string());
   RunnerOptions options;
   options.workers = o.jobs;
   options.cancel = &g_cancel;
   options.progress = &std::cerr;
   options.tty = isatty(STDERR_FILENO) != 0;
-  RunnerSummary s = run_jobs(jobs, store, options);
-  if (!s.cancelled && s.failed.empty() && study.confirm.enabled) s = run_confirm_stage(study, store, options, s);
+  const JobRunner run = mpi ? JobRunner([&](const std::vector<Job>& j, Store& s, const RunnerOptions& op) {
+    return mpi->run_jobs(j, s, op);
+  })
+                            : JobRunner(run_jobs);
+  RunnerSummary s = run(jobs, store, options);
+  const bool confirm = !s.cancelled && s.failed.empty() && study.confirm.enabled;
+  if (confirm && shard)  // the ranking needs every share's screen: it runs after the merge
+    std::cerr << fmt::format("[confirm] runs once the shares are merged: gapflow study {} --db MERGED.sqlite\n",
+                             o.study_file);
+  else if (confirm)
+    s = run_confirm_stage(study, store, options, s, run);
   if (s.cancelled) {
     std::cerr << fmt::format("interrupted: {} runs stored in {} ({} of this study's {} jobs); run the same command "
                              "again to resume\n",
@@ -148,7 +206,21 @@ StudyCommands::StudyCommands(CLI::App& app) : o_(std::make_unique<Options>()) {
   o.study->add_option("--db", o.db,
                       "Results store (default: results/<study name>/runs.sqlite; with --quick "
                       "results/<study name>-quick/runs.sqlite)");
-  o.study->add_flag("--dry-run", o.dry_run, "Print the job count per series and model, and exit");
+  auto* dry = o.study->add_flag("--dry-run", o.dry_run, "Print the job count per series and model, and exit");
+  // Clusters (README "Running a study on a cluster").
+  auto* plan = o.study->add_flag(
+      "--plan", o.plan, "Print the job list as JSON lines (key, share, expected cost, resolved scenario) and exit");
+  o.study->add_option("--shard", o.shard,
+                      "Run share I of K only (stable by job key, balanced by expected cost), into its own store "
+                      "(default results/<name>/shards/shard-I-of-K.sqlite); e.g. --shard 3/8");
+  o.study->add_option("--shards", o.shards, "With --plan and no --shard: the number of shares to list")
+      ->check(CLI::Range(1, 100000));
+  auto* status = o.study->add_flag("--status", o.status, "List every job (of the share) as done or missing, and exit");
+  auto* mpi = o.study->add_flag("--mpi", o.mpi,
+                                "Run as an MPI job (mpirun -np N gapflow study ... --mpi): rank 0 hands out jobs "
+                                "and writes the store, the others simulate");
+  plan->excludes(dry)->excludes(status)->excludes(mpi);
+  status->excludes(dry)->excludes(mpi);
 
   o.export_cmd = app.add_subcommand("export", "Export one table of a study's results store as CSV");
   o.export_cmd->add_option("db", o.export_db, "Results store (runs.sqlite)")->required();

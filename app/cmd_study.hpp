@@ -1,6 +1,7 @@
 // The `gapflow study` and `gapflow export` subcommands.
 //
 //   gapflow study STUDY.toml [--quick] [--jobs N] [--db PATH] [--dry-run]
+//                            [--plan [--shards K]] [--shard I/K] [--status] [--mpi]
 //   gapflow export DB --table runs|crossings|avalanches|clogs [--csv OUT.csv]
 //
 // Usage in main(): construct StudyCommands on the app before parsing; after

@@ -5,9 +5,11 @@
 //   gapflow export DB --table TABLE --csv OUT.csv
 //   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots]
 //   gapflow calibrate DATA.toml [--model 2d|3d] ...   gapflow twin DATA.toml --out ... --truth ...
+//   gapflow merge OUT.sqlite SHARD.sqlite... | compare A.sqlite B.sqlite | slurm STUDY.toml [--array-size K]
 // Exit codes: 0 success, 2 bad input (scenario or command line), 1 failure while running.
 #include "app/cli_errors.hpp"
 #include "app/cmd_calibrate.hpp"
+#include "app/cmd_cluster.hpp"
 #include "app/cmd_report.hpp"
 #include "app/cmd_study.hpp"
 #include "models/registry.hpp"
@@ -178,6 +180,7 @@ int main(int argc, char** argv) {
   gapflow::StudyCommands study_commands(app);
   gapflow::ReportCommand report_command(app);
   gapflow::CalibrateCommands calibrate_commands(app);
+  gapflow::ClusterCommands cluster_commands(app);
 
   try {
     app.parse(argc, argv);
@@ -191,6 +194,7 @@ int main(int argc, char** argv) {
   if (auto code = study_commands.run()) return *code;
   if (auto code = report_command.run()) return *code;
   if (auto code = calibrate_commands.run()) return *code;
+  if (auto code = cluster_commands.run()) return *code;
   return exit_code_of([&] {
     if (*run) return cmd_run(run_args, model, out_path, quiet, replicates, jobs);
     if (*check) return cmd_check(check_args, print);

@@ -201,7 +201,7 @@ std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& set
         if (it != fresh.end()) {
           runs.push_back(it->second);
         } else {
-          std::optional<StoredRun> stored = store_.get(jobs[j].id.key);
+          std::optional<StoredRun> stored = store_.load_run(jobs[j].id.key);
           if (!stored) throw std::runtime_error("run " + jobs[j].id.key + " is missing from the store");
           runs.push_back(std::move(stored->record));
         }

@@ -10,6 +10,8 @@ packages=(
   libgtest-dev libbenchmark-dev libbenchmark-tools
   libtomlplusplus-dev libcli11-dev libsqlite3-dev libfmt-dev libtbb-dev
   python3 python3-matplotlib
+  libopenmpi-dev openmpi-bin   # gapflow study --mpi (optional at build time)
+  slurm-wlm munge              # scripts/slurm_local.sh: a one-node Slurm for the slow cluster test
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -35,7 +35,13 @@ struct Job {
   ModelKind model = ModelKind::box2d;
   std::filesystem::path scenario;       // the series' scenario file
   std::vector<std::string> overrides;   // study set, series set, axis values, run.seed, run.replicate
+  double expected_cost = 0;             // relative cost of the run (expected_run_cost); 0 = unknown
 };
+
+// What a run is expected to cost, in 2D particle-seconds: particles x run.time_limit_s, times ~2.5 for the
+// 3D model (measured per run: README "Studies"). A bound, not a forecast (a run may end early), but it
+// ranks jobs the way their wall time does, which is what balancing shards needs (studies/shard.hpp).
+double expected_run_cost(const CompiledScenario& scenario, ModelKind kind);
 
 // Stable numeric id of a model in job keys (never the enum's position).
 std::uint64_t model_key_id(ModelKind kind);

@@ -21,6 +21,15 @@ std::string format_duration(double seconds) {
   return fmt::format("{}h {:02}m", s / 3600, (s % 3600) / 60);
 }
 
+RunRecord run_job(const Job& job, const std::atomic<bool>* cancel) {
+  const CompiledScenario sc = compile_job(job);
+  // The key promised what this run is: a scenario file edited since the expansion breaks that promise.
+  if (sc.scenario_hash != job.id.scenario_hash)
+    throw std::runtime_error(fmt::format("scenario {} changed since the study started (hash {:016x}, expected {:016x})",
+                                         job.scenario.string(), sc.scenario_hash, job.id.scenario_hash));
+  return run_model(sc, job.model, nullptr, cancel);
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -77,29 +86,25 @@ class Progress {
   int last_tenth_ = 0;
 };
 
-RunRecord default_run(const Job& job, const std::atomic<bool>* cancel) {
-  const CompiledScenario sc = compile_job(job);
-  // The key promised what this run is: a scenario file edited since the expansion breaks that promise.
-  if (sc.scenario_hash != job.id.scenario_hash)
-    throw std::runtime_error(fmt::format("scenario {} changed since the study started (hash {:016x}, expected {:016x})",
-                                         job.scenario.string(), sc.scenario_hash, job.id.scenario_hash));
-  return run_model(sc, job.model, nullptr, cancel);
-}
-
 bool cancelled(const std::atomic<bool>* cancel) { return cancel && cancel->load(); }
 
 }  // namespace
 
-RunnerSummary run_jobs(const std::vector<Job>& jobs, Store& store, const RunnerOptions& options) {
-  RunnerSummary summary;
+std::vector<const Job*> jobs_to_run(const std::vector<Job>& jobs, const Store& store, RunnerSummary& summary) {
   summary.total = static_cast<int>(jobs.size());
   const std::set<std::string> stored = store.keys();
   std::vector<const Job*> todo;
   for (const Job& j : jobs)
     if (!stored.count(j.id.key)) todo.push_back(&j);
   summary.already_stored = summary.total - static_cast<int>(todo.size());
+  return todo;
+}
 
-  const auto run = options.run ? options.run : default_run;
+RunnerSummary run_jobs(const std::vector<Job>& jobs, Store& store, const RunnerOptions& options) {
+  RunnerSummary summary;
+  const std::vector<const Job*> todo = jobs_to_run(jobs, store, summary);
+
+  const auto run = options.run ? options.run : run_job;
   std::mutex mutex;  // guards summary.failed, finished_workers; signals the progress loop
   std::condition_variable changed;
   std::size_t next = 0;

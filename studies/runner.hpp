@@ -39,6 +39,13 @@ struct RunnerSummary {
 
 RunnerSummary run_jobs(const std::vector<Job>& jobs, Store& store, const RunnerOptions& options);
 
+// The jobs not yet in the store (resume), in order; sets summary.total and summary.already_stored.
+std::vector<const Job*> jobs_to_run(const std::vector<Job>& jobs, const Store& store, RunnerSummary& summary);
+
+// Run one job the default way: compile its scenario (checking it still hashes to the job's key) and
+// run its model. What run_jobs does without RunnerOptions::run; MPI workers call it too.
+RunRecord run_job(const Job& job, const std::atomic<bool>* cancel);
+
 // "12 runs/min" progress text helpers (also used by the dry run).
 std::string format_duration(double seconds);
 

@@ -1,11 +1,13 @@
 #include "studies/store.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <sqlite3.h>
 
 #include <algorithm>
 #include <ostream>
 #include <stdexcept>
+#include <unistd.h>
 
 #include "gapflow_code_version.h"  // generated at every build (studies/CMakeLists.txt)
 
@@ -214,6 +216,56 @@ void insert_children(sqlite3* db, const std::string& key, const RunRecord& r) {
   }
 }
 
+// One run and its child rows (inside the caller's transaction). finished_at: now when empty.
+void insert_run(sqlite3* db, const JobIdentity& id, const RunRecord& r, const std::string& version,
+                const std::optional<std::string>& finished_at) {
+  Statement s(db, R"sql(INSERT INTO runs (
+      job_key, study, series, point, point_label, axes_json, model, replicate, base_seed, run_seed,
+      scenario_hash, scenario_name, code_version, particles, passed, reinjected, perturbations, escaped,
+      max_conservation_error, sim_time_s, wall_time_s, end_reason, regime, j_paper, j_flowing, j_mid, j_paper_star,
+      j_flowing_star,
+      diameter_m, gap_m, distance_m, w_over_d, d_over_d, incline_rad, time_step_s, n_clogs, n_avalanches,
+      finished_at)
+    VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
+            coalesce(?38, strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))))sql");
+  // SQLite integers are signed 64-bit: the seed's bits are kept (a seed >= 2^63 reads back unchanged via the cast).
+  s.bind_all(id.key, id.study, id.series, id.point, id.point_label, id.axes_json, id.model, id.replicate,
+             static_cast<std::int64_t>(id.base_seed), hex(id.run_seed), hex(id.scenario_hash), r.scenario_name,
+             version, r.particles, r.passed, r.reinjected, r.perturbations, r.escaped, r.max_conservation_error, r.sim_time_s,
+             r.wall_time_s, std::string(to_string(r.end_reason)), std::string(to_string(r.regime)), r.j_paper,
+             r.j_flowing, r.j_mid, r.j_paper_star(), r.j_flowing_star(), r.diameter_m, r.gap_m, r.distance_m,
+             r.gap_m / r.diameter_m, r.distance_m / r.diameter_m, r.incline_rad, r.time_step_s,
+             static_cast<int>(r.clogs.size()), static_cast<int>(r.avalanches.size()), finished_at);
+  s.run();
+  insert_children(db, id.key, r);
+}
+
+// Added to schema version 1 for clusters (studies/merge.hpp): where each run was made, and the job
+// list of a sharded study. Created when first written, so older stores stay readable.
+constexpr const char* kClusterSchema = R"sql(
+CREATE TABLE IF NOT EXISTS provenance (
+  job_key TEXT PRIMARY KEY, shard TEXT NOT NULL, host TEXT NOT NULL, code_version TEXT NOT NULL,
+  merged_from TEXT NOT NULL, recorded_at TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS plan (
+  job_key TEXT PRIMARY KEY, shard TEXT NOT NULL, study TEXT NOT NULL, series TEXT NOT NULL, point INTEGER NOT NULL,
+  point_label TEXT NOT NULL, model TEXT NOT NULL, replicate INTEGER NOT NULL, expected_cost REAL NOT NULL
+);
+)sql";
+
+void write_provenance(sqlite3* db, const std::string& key, const Provenance& p) {
+  exec(db, kClusterSchema);
+  Statement s(db, "INSERT OR REPLACE INTO provenance (job_key, shard, host, code_version, merged_from, recorded_at) "
+                  "VALUES (?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%SZ', 'now'))");
+  s.bind_all(key, p.shard, p.host, p.code_version, p.merged_from).run();
+}
+
+std::string host_name() {
+  char name[256] = {};
+  if (gethostname(name, sizeof name - 1) != 0) return "?";
+  return name;
+}
+
 // The clog columns to select: an added column a store does not have yet reads as NULL.
 std::string clog_columns(sqlite3* db) {
   std::string columns = "t_start_s, duration_s, censored";
@@ -282,7 +334,8 @@ Store::Store(const std::filesystem::path& file) {
 Store::~Store() { sqlite3_close(db_); }
 
 const std::vector<std::string>& Store::tables() {
-  static const std::vector<std::string> names{"runs", "crossings", "avalanches", "clogs", "study_files"};
+  static const std::vector<std::string> names{"runs",        "crossings",  "avalanches", "clogs",
+                                              "study_files", "provenance", "plan"};
   return names;
 }
 
@@ -311,84 +364,110 @@ std::size_t Store::count() const {
 void Store::put(const JobIdentity& id, const RunRecord& r) {
   std::lock_guard lock(mutex_);
   Transaction tx(db_);
-  Statement s(db_, R"sql(INSERT INTO runs (
-      job_key, study, series, point, point_label, axes_json, model, replicate, base_seed, run_seed,
-      scenario_hash, scenario_name, code_version, particles, passed, reinjected, perturbations, escaped,
-      max_conservation_error, sim_time_s, wall_time_s, end_reason, regime, j_paper, j_flowing, j_mid, j_paper_star,
-      j_flowing_star,
-      diameter_m, gap_m, distance_m, w_over_d, d_over_d, incline_rad, time_step_s, n_clogs, n_avalanches,
-      finished_at)
-    VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?,
-            strftime('%Y-%m-%dT%H:%M:%fZ', 'now')))sql");
-  // SQLite integers are signed 64-bit: the seed's bits are kept (a seed >= 2^63 reads back unchanged via the cast).
-  s.bind_all(id.key, id.study, id.series, id.point, id.point_label, id.axes_json, id.model, id.replicate,
-             static_cast<std::int64_t>(id.base_seed), hex(id.run_seed), hex(id.scenario_hash), r.scenario_name,
-             std::string(code_version()), r.particles, r.passed, r.reinjected, r.perturbations, r.escaped, r.max_conservation_error, r.sim_time_s,
-             r.wall_time_s, std::string(to_string(r.end_reason)), std::string(to_string(r.regime)), r.j_paper,
-             r.j_flowing, r.j_mid, r.j_paper_star(), r.j_flowing_star(), r.diameter_m, r.gap_m, r.distance_m,
-             r.gap_m / r.diameter_m, r.distance_m / r.diameter_m, r.incline_rad, r.time_step_s,
-             static_cast<int>(r.clogs.size()), static_cast<int>(r.avalanches.size()));
-  s.run();
-  insert_children(db_, id.key, r);
+  insert_run(db_, id, r, code_version(), std::nullopt);
+  write_provenance(db_, id.key, {shard_, host_name(), code_version(), ""});
   tx.commit();
 }
 
-namespace {
+std::vector<StoredRun> Store::load(const std::optional<std::string>& study) const {
+  return select_runs("?1 IS NULL OR study = ?1", study);
+}
 
-constexpr const char* kRunColumns = R"sql(
+std::optional<StoredRun> Store::load_run(const std::string& key) const {
+  std::vector<StoredRun> runs = select_runs("job_key = ?1", key);
+  if (runs.empty()) return std::nullopt;
+  return std::move(runs.front());
+}
+
+std::vector<StoredRun> Store::select_runs(const char* where, const std::optional<std::string>& arg) const {
+  std::lock_guard lock(mutex_);
+  const std::string sql = fmt::format(R"sql(SELECT
       job_key, study, series, point, point_label, axes_json, model, replicate, base_seed, run_seed,
       scenario_hash, scenario_name, code_version, particles, passed, reinjected, perturbations, escaped,
       max_conservation_error, sim_time_s, wall_time_s, end_reason, regime, j_paper, j_flowing, j_mid,
-      diameter_m, gap_m, distance_m, incline_rad, time_step_s, finished_at)sql";
-
-// One row of `runs` (the statement selects kRunColumns), without child rows.
-StoredRun read_run_row(Statement& s) {
-  StoredRun run;
-  JobIdentity& id = run.id;
-  RunRecord& r = run.record;
-  int c = 0;
-  id.key = s.text(c++), id.study = s.text(c++), id.series = s.text(c++), id.point = s.integer(c++);
-  id.point_label = s.text(c++), id.axes_json = s.text(c++), id.model = s.text(c++);
-  id.replicate = s.integer(c++), id.base_seed = static_cast<std::uint64_t>(s.int64(c++));
-  id.run_seed = from_hex(s.text(c++)), id.scenario_hash = from_hex(s.text(c++));
-  r.model = id.model, r.replicate = id.replicate, r.base_seed = id.base_seed;
-  r.run_seed = id.run_seed, r.scenario_hash = id.scenario_hash;
-  r.scenario_name = s.text(c++), run.code_version = s.text(c++);
-  r.particles = s.integer(c++), r.passed = s.integer(c++), r.reinjected = s.integer(c++);
-  r.perturbations = s.integer(c++), r.escaped = s.integer(c++);
-  r.max_conservation_error = s.integer(c++), r.sim_time_s = s.real(c++), r.wall_time_s = s.real(c++);
-  r.end_reason = parse_enum(s.text(c++), {EndReason::all_passed, EndReason::n_passed, EndReason::time_limit,
-                                          EndReason::permanent_clog});
-  r.regime = parse_enum(s.text(c++), {Regime::continuous, Regime::intermittent, Regime::clogged});
-  r.j_paper = s.optional_real(c++), r.j_flowing = s.optional_real(c++), r.j_mid = s.optional_real(c++);
-  r.diameter_m = s.real(c++), r.gap_m = s.real(c++), r.distance_m = s.real(c++);
-  r.incline_rad = s.real(c++), r.time_step_s = s.real(c++), run.finished_at = s.text(c++);
-  return run;
-}
-
-}  // namespace
-
-std::vector<StoredRun> Store::load(const std::optional<std::string>& study) const {
-  std::lock_guard lock(mutex_);
-  const std::string sql = std::string("SELECT ") + kRunColumns + " FROM runs WHERE ?1 IS NULL OR study = ?1 ORDER BY job_key";
+      diameter_m, gap_m, distance_m, incline_rad, time_step_s, finished_at
+    FROM runs WHERE {} ORDER BY job_key)sql", where);
   Statement s(db_, sql.c_str());
-  if (study) s.bind(1, *study);
+  if (arg) s.bind(1, *arg);
   std::vector<StoredRun> out;
-  while (s.step()) out.push_back(read_run_row(s));
+  while (s.step()) {
+    StoredRun run;
+    JobIdentity& id = run.id;
+    RunRecord& r = run.record;
+    int c = 0;
+    id.key = s.text(c++), id.study = s.text(c++), id.series = s.text(c++), id.point = s.integer(c++);
+    id.point_label = s.text(c++), id.axes_json = s.text(c++), id.model = s.text(c++);
+    id.replicate = s.integer(c++), id.base_seed = static_cast<std::uint64_t>(s.int64(c++));
+    id.run_seed = from_hex(s.text(c++)), id.scenario_hash = from_hex(s.text(c++));
+    r.model = id.model, r.replicate = id.replicate, r.base_seed = id.base_seed;
+    r.run_seed = id.run_seed, r.scenario_hash = id.scenario_hash;
+    r.scenario_name = s.text(c++), run.code_version = s.text(c++);
+    r.particles = s.integer(c++), r.passed = s.integer(c++), r.reinjected = s.integer(c++);
+    r.perturbations = s.integer(c++), r.escaped = s.integer(c++);
+    r.max_conservation_error = s.integer(c++), r.sim_time_s = s.real(c++), r.wall_time_s = s.real(c++);
+    r.end_reason = parse_enum(s.text(c++), {EndReason::all_passed, EndReason::n_passed, EndReason::time_limit,
+                                            EndReason::permanent_clog});
+    r.regime = parse_enum(s.text(c++), {Regime::continuous, Regime::intermittent, Regime::clogged});
+    r.j_paper = s.optional_real(c++), r.j_flowing = s.optional_real(c++), r.j_mid = s.optional_real(c++);
+    r.diameter_m = s.real(c++), r.gap_m = s.real(c++), r.distance_m = s.real(c++);
+    r.incline_rad = s.real(c++), r.time_step_s = s.real(c++), run.finished_at = s.text(c++);
+    out.push_back(std::move(run));
+  }
   const std::string columns = clog_columns(db_);
   for (StoredRun& run : out) load_children(db_, run.id.key, columns, run.record);
   return out;
 }
 
-std::optional<StoredRun> Store::get(const std::string& key) const {
+void Store::import_runs(const std::vector<StoredRun>& runs, const std::vector<Provenance>& provenance) {
+  if (runs.size() != provenance.size()) throw std::logic_error("import_runs: one provenance per run");
   std::lock_guard lock(mutex_);
-  const std::string sql = std::string("SELECT ") + kRunColumns + " FROM runs WHERE job_key = ?1";
-  Statement s(db_, sql.c_str());
-  s.bind(1, key);
-  if (!s.step()) return std::nullopt;
-  StoredRun run = read_run_row(s);
-  load_children(db_, run.id.key, clog_columns(db_), run.record);
-  return run;
+  Transaction tx(db_);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const std::string& finished = runs[i].finished_at;
+    insert_run(db_, runs[i].id, runs[i].record, runs[i].code_version,
+               finished.empty() ? std::nullopt : std::optional<std::string>(finished));
+    write_provenance(db_, runs[i].id.key, provenance[i]);
+  }
+  tx.commit();
+}
+
+std::map<std::string, Provenance> Store::provenance() const {
+  std::lock_guard lock(mutex_);
+  std::map<std::string, Provenance> out;
+  if (!has_table(db_, "provenance")) return out;
+  Statement s(db_, "SELECT job_key, shard, host, code_version, merged_from FROM provenance");
+  while (s.step()) out[s.text(0)] = {s.text(1), s.text(2), s.text(3), s.text(4)};
+  return out;
+}
+
+void Store::record_plan(const std::vector<PlannedJob>& plan) {
+  std::lock_guard lock(mutex_);
+  Transaction tx(db_);
+  exec(db_, kClusterSchema);
+  exec(db_, "DELETE FROM plan");
+  Statement s(db_, "INSERT INTO plan (job_key, shard, study, series, point, point_label, model, replicate, "
+                   "expected_cost) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  for (const PlannedJob& p : plan)
+    s.bind_all(p.id.key, p.shard, p.id.study, p.id.series, p.id.point, p.id.point_label, p.id.model, p.id.replicate,
+               p.expected_cost)
+        .run();
+  tx.commit();
+}
+
+std::vector<PlannedJob> Store::plan() const {
+  std::lock_guard lock(mutex_);
+  std::vector<PlannedJob> out;
+  if (!has_table(db_, "plan")) return out;
+  Statement s(db_, "SELECT job_key, shard, study, series, point, point_label, model, replicate, expected_cost "
+                   "FROM plan ORDER BY job_key");
+  while (s.step()) {
+    PlannedJob p;
+    p.id.key = s.text(0), p.shard = s.text(1), p.id.study = s.text(2), p.id.series = s.text(3);
+    p.id.point = s.integer(4), p.id.point_label = s.text(5), p.id.model = s.text(6), p.id.replicate = s.integer(7);
+    p.expected_cost = s.real(8);
+    out.push_back(std::move(p));
+  }
+  return out;
 }
 
 void Store::record_study_file(const std::string& study, const std::string& source, const std::string& text) {
@@ -413,7 +492,7 @@ void Store::export_csv(const std::string& table, std::ostream& out) const {
   const auto& names = tables();
   if (std::find(names.begin(), names.end(), table) == names.end())
     throw std::invalid_argument(
-        fmt::format("table '{}' is not one of: runs, crossings, avalanches, clogs, study_files", table));
+        fmt::format("table '{}' is not one of: {}", table, fmt::join(names, ", ")));
   std::lock_guard lock(mutex_);
   if (!has_table(db_, table))
     throw std::invalid_argument(fmt::format("this store has no table '{}' (written before it existed)", table));

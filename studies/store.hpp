@@ -6,6 +6,8 @@
 //   clogs       (job_key, idx, t_start_s, duration_s, censored)
 //
 //   study_files (study, source, text, recorded_at)            the study file as run
+//   provenance  (job_key, shard, host, code_version, merged_from, recorded_at)   where a run was made
+//   plan        (job_key, shard, study, series, point, ...)    the job list of a sharded study
 //
 // A run and its child rows are written in one transaction: after a crash or
 // kill -9 a job is either completely stored or absent, so resuming = running
@@ -18,6 +20,7 @@
 
 #include <filesystem>
 #include <iosfwd>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -44,6 +47,21 @@ struct StudyFileRecord {
   std::string recorded_at;  // UTC, ISO 8601
 };
 
+// Where a run was made (the provenance table): kept through merges.
+struct Provenance {
+  std::string shard;         // "2/8" for share 2 of 8; "" for a whole-study run; "rank N" in an MPI job
+  std::string host;          // gethostname() of the machine that simulated it
+  std::string code_version;  // the build that simulated it
+  std::string merged_from;   // the shard store it was merged from ("" where it was made)
+};
+
+// One job of a sharded plan (the plan table): what a merge expects to find.
+struct PlannedJob {
+  JobIdentity id;
+  std::string shard;         // "I/K"
+  double expected_cost = 0;  // Job::expected_cost
+};
+
 // What this build writes into runs.code_version (git describe at configure time).
 const char* code_version();
 
@@ -62,10 +80,21 @@ class Store {
   // Store one finished run in one transaction. Throws if the key is already stored.
   void put(const JobIdentity& id, const RunRecord& record);
 
+  // Which shard this store's put() records in `provenance` ("" = a whole-study run).
+  void set_shard(const std::string& shard) { shard_ = shard; }
+  // Store runs made elsewhere (a merge, an MPI rank): their code version and finish time (now when
+  // empty) are kept. Runs and provenance go in one transaction; the keys must not be stored yet.
+  void import_runs(const std::vector<StoredRun>& runs, const std::vector<Provenance>& provenance);
+  // Provenance of every run that has one (runs written before the table existed have none).
+  std::map<std::string, Provenance> provenance() const;
+  // The job list of a sharded study (every share's jobs, not only this store's); replaces what was there.
+  void record_plan(const std::vector<PlannedJob>& plan);
+  std::vector<PlannedJob> plan() const;  // by job key; empty when none was recorded
+
   // Every stored run (of one study, when given), in job-key order.
   std::vector<StoredRun> load(const std::optional<std::string>& study = std::nullopt) const;
-  // One stored run by job key, child rows included (empty when not stored).
-  std::optional<StoredRun> get(const std::string& key) const;
+  // One stored run by job key (a merge compares runs of one key without loading the whole store).
+  std::optional<StoredRun> load_run(const std::string& key) const;
 
   // Keep (or replace) the study file of `study`: the last one run is the one recorded.
   void record_study_file(const std::string& study, const std::string& source, const std::string& text);
@@ -73,11 +102,14 @@ class Store {
 
   // One table as CSV (header row; NULL = empty field; reals round-trip exactly).
   void export_csv(const std::string& table, std::ostream& out) const;
-  static const std::vector<std::string>& tables();  // runs, crossings, avalanches, clogs, study_files
+  static const std::vector<std::string>& tables();  // runs, crossings, avalanches, clogs, study_files, provenance, plan
 
  private:
+  std::vector<StoredRun> select_runs(const char* where, const std::optional<std::string>& arg) const;
+
   sqlite3* db_ = nullptr;
   mutable std::mutex mutex_;
+  std::string shard_;
 };
 
 }  // namespace gapflow
