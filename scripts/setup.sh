@@ -11,7 +11,7 @@ packages=(
   libtomlplusplus-dev libcli11-dev libsqlite3-dev libfmt-dev libtbb-dev
   python3 python3-matplotlib
   libcairo2-dev ffmpeg libcpp-httplib-dev   # view/ (snapshots, movies) and gapflow serve
-  python3-vtk9 chromium                     # tests: ParaView files read back by VTK; the live view in headless Chromium
+  python3-vtk9 python3-pil chromium         # tests: ParaView files read back by VTK; the live view in headless Chromium
 )
 missing=()
 for p in "${packages[@]}"; do
