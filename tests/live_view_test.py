@@ -54,22 +54,36 @@ try:
     before = get("/state")["generation"]
     with tempfile.TemporaryDirectory() as tmp:
         shot = os.path.join(tmp, "shot.png")
-        subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                        "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                        f"--user-data-dir={tmp}/profile", "--window-size=800,1000", "--timeout=5000",
-                        f"--screenshot={shot}", base + "/?set=obstruction.distance_mm=150"],
-                       check=True, timeout=120, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        img = Image.open(shot).convert("RGB")
-        check(img.size == (800, 1000), f"screenshot size {img.size}")
-        colours = img.getcolors(maxcolors=1 << 20) or []
 
-        def count(rgb, tol):
+        def screenshot(wait_ms):
+            subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                            "--no-first-run", "--disable-background-networking", "--disable-component-update",
+                            "--disable-sync", f"--user-data-dir={tmp}/profile", "--window-size=800,1000",
+                            f"--virtual-time-budget={wait_ms}", f"--screenshot={shot}",
+                            base + "/?set=obstruction.distance_mm=150"],
+                           check=True, timeout=120, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            img = Image.open(shot).convert("RGB")
+            if os.environ.get("GAPFLOW_KEEP_SHOT"):
+                shutil.copy(shot, os.environ["GAPFLOW_KEEP_SHOT"])
+            return img, img.getcolors(maxcolors=1 << 20) or []
+
+        def count(colours, rgb, tol):
             return sum(n for n, c in colours if all(abs(a - b) <= tol for a, b in zip(c, rgb)))
 
+        def spheres(colours):
+            return sum(count(colours, c, 40) for c in [(68, 1, 84), (33, 145, 140), (253, 231, 37)])
+
+        # Headless Chromium shoots at the load event unless given a virtual-time budget: the page's
+        # 100 ms polling timers then run (each waits for its real fetch) until the budget is spent.
+        for wait_ms in (2000, 6000):
+            img, colours = screenshot(wait_ms)
+            if spheres(colours) > 2000:
+                break
+            print(f"no spheres after {wait_ms} ms: trying a longer wait")
+        check(img.size == (800, 1000), f"screenshot size {img.size}")
         check(len(colours) > 20, f"screenshot not blank ({len(colours)} colours)")
-        spheres = count((68, 1, 84), 40) + count((33, 145, 140), 40) + count((253, 231, 37), 40)
-        check(spheres > 2000, f"spheres drawn ({spheres} px in viridis colours)")
-        check(count((140, 90, 50), 2) > 1000, f"obstruction drawn ({count((140, 90, 50), 2)} px)")
+        check(spheres(colours) > 2000, f"spheres drawn ({spheres(colours)} px in viridis colours)")
+        check(count(colours, (140, 90, 50), 2) > 1000, f"obstruction drawn ({count(colours, (140, 90, 50), 2)} px)")
     geometry = get("/geometry")
     check(geometry["settings"]["obstruction.distance_mm"] == 150, "served scenario has distance 150 mm")
     check(geometry["overrides"] == ["obstruction.distance_mm=150"], f"overrides {geometry['overrides']}")
