@@ -61,10 +61,12 @@ int serve(const ServeCommand::Options& o) {
   server.Post("/restart", [&](const httplib::Request&, httplib::Response& r) { live.restart(), r.set_content("restarted", "text/plain"); });
   // Body: one `key=value`, validated like --set; the run restarts with it.
   server.Post("/set", [&](const httplib::Request& q, httplib::Response& r) {
-    const std::string error = live.apply(q.body);
+    bool restarted = false;
+    const std::string error = live.apply(q.body, restarted);
     if (error.empty()) {
-      std::cerr << "serve: applied " << q.body << " (run restarted)\n";
-      r.set_content("applied " + q.body + " (run restarted from release)", "text/plain");
+      const std::string how = restarted ? " (run restarted from release)" : " (taken up by the running run)";
+      std::cerr << "serve: applied " << q.body << how << "\n";
+      r.set_content("applied " + q.body + how, "text/plain");
     } else {
       r.status = 400;
       r.set_content("rejected: " + error, "text/plain");

@@ -8,7 +8,8 @@
 // controls to pause, restart and change the obstruction (distance, shape), the gap
 // and the shaking. Every change goes through the scenario loader's --set path
 // (validated like the file, errors shown on the page) and restarts the run from
-// release with the new scenario (the engines compile the geometry once per run).
+// release with the new scenario (the engines compile the geometry once per run);
+// a shaking amplitude, frequency, direction or period is taken up by the running run.
 //
 // Usage in main(): construct ServeCommand on the app before parsing; after
 // parsing, `if (auto code = serve_command.run()) return *code;`.

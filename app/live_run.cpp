@@ -131,7 +131,7 @@ void LiveRun::restart() {
   wake_.notify_all();
 }
 
-std::string LiveRun::apply(const std::string& assignment) {
+std::string LiveRun::apply(const std::string& assignment, bool& restarted) {
   std::vector<std::string> next;
   {
     std::lock_guard lock(mutex_);
@@ -139,16 +139,27 @@ std::string LiveRun::apply(const std::string& assignment) {
   }
   std::erase_if(next, [&](const std::string& o) { return key_of(o) == key_of(assignment); });
   next.push_back(assignment);
+  std::optional<CompiledScenario> sc;
   try {
-    compile_with(def_.scenario_file, next);
+    sc = compile_with(def_.scenario_file, next);
   } catch (const ScenarioError& e) {
     return e.what();
   }
   {
     std::lock_guard lock(mutex_);
     overrides_ = next;
-    ++generation_;
-    cancel_ = true;
+    const ShakingDef& now = running_shaking_;
+    const bool live = assignment.starts_with("shaking.") && sc->def.shaking.walls.enabled == now.walls.enabled &&
+                      sc->def.shaking.obstruction.enabled == now.obstruction.enabled;
+    restarted = !live;
+    if (live) {
+      running_shaking_ = sc->def.shaking;
+      shaking_ = sc->def.shaking;  // the running run takes it at its next step
+      geometry_ = geometry_of(*sc, def_.model, overrides_);
+    } else {
+      ++generation_;
+      cancel_ = true;
+    }
   }
   wake_.notify_all();
   return "";
@@ -164,10 +175,12 @@ void LiveRun::loop() {
       overrides = overrides_;
       generation = generation_;
       cancel_ = false;
+      shaking_.reset();
     }
-    const CompiledScenario sc = compile_with(def_.scenario_file, overrides);  // validated when applied
+    CompiledScenario sc = compile_with(def_.scenario_file, overrides);  // validated when applied
     {
       std::lock_guard lock(mutex_);
+      running_shaking_ = sc.def.shaking;
       geometry_ = geometry_of(sc, def_.model, overrides);
       state_ = "\"phase\":\"settling\",\"t\":0,\"p\":[" + seed_particles_json(sc) + "]";
     }
@@ -182,7 +195,9 @@ void LiveRun::loop() {
   }
 }
 
-void LiveRun::run_once(const CompiledScenario& sc) {
+// `sc` is the run's own copy: a shaking change is written into it between two steps,
+// on this thread, and the driver and the monitor read the schedule from it.
+void LiveRun::run_once(CompiledScenario& sc) {
   auto session = make_session(sc, def_.model);
   Clock::time_point start;
   double paused_s = 0, last_publish = -1, last_t = 0, last_wall = 0;
@@ -199,6 +214,7 @@ void LiveRun::run_once(const CompiledScenario& sc) {
       const auto pause_start = Clock::now();
       while (paused_ && !cancel_) wake_.wait_for(lock, std::chrono::milliseconds(100));
       paused_s += seconds_since(pause_start);
+      if (shaking_) sc.def.shaking = *shaking_, shaking_.reset();
     }
     const double wall = seconds_since(start) - paused_s;
     if (t > wall * def_.speed)

@@ -2,7 +2,10 @@
 // paced to real time, steerable from the HTTP handlers (pause, restart, --set
 // style changes). Every change is validated by the scenario loader exactly like
 // `--set` on the command line and, when valid, restarts the run from release
-// with the new scenario. State is published as JSON for the page to poll.
+// with the new scenario; a change of a shaking schedule (shaking.*, except switching a
+// shaker on or off, which changes which bodies the engine moves) is taken up by the
+// running run at its next step (the driver reads the schedule every step), without a
+// restart. State is published as JSON for the page to poll.
 #pragma once
 
 #include "models/registry.hpp"
@@ -10,6 +13,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -36,13 +40,15 @@ class LiveRun {
   std::string geometry_json() const;  // walls, obstruction at rest, gap tips, the current overrides
   void set_paused(bool paused);
   void restart();
-  // Apply `key=value` like --set: on success the run restarts and "" is returned;
+  // Apply `key=value` like --set: on success the run restarts (or, for shaking.*, takes
+  // the new schedule at its next step) and "" is returned;
   // otherwise the loader's message (with --set:N:column, the key, what is allowed).
-  std::string apply(const std::string& assignment);
+  // `restarted` says which of the two happened.
+  std::string apply(const std::string& assignment, bool& restarted);
 
  private:
   void loop();
-  void run_once(const CompiledScenario& sc);
+  void run_once(CompiledScenario& sc);
   void publish(const CompiledScenario& sc, double t, const EngineSession& s, const GapMonitor& m, double rtf);
 
   LiveRunDef def_;
@@ -53,6 +59,8 @@ class LiveRun {
   int generation_ = 0;                  // guarded: bumped by every restart
   bool paused_ = false;                 // guarded
   bool stopping_ = false;               // guarded
+  std::optional<ShakingDef> shaking_;   // guarded: a shaking change for the running run to take up
+  ShakingDef running_shaking_;          // guarded: the schedule the running run has (or will have)
   std::atomic<bool> cancel_{false};     // the running run must stop (restart or shutdown)
   std::thread thread_;
 };
