@@ -1,17 +1,21 @@
 // gapflow: the command line.
 //   gapflow run SCENARIO.toml [--model 2d|3d] [--set key=value]... [--out record.json]
+//       [--snapshot-at 0,5 --snapshot-dir DIR] [--snapshot-on-clog] [--movie out.mp4] [--vtk DIR]
 //   gapflow check SCENARIO.toml [--set key=value]... [--print]
 //   gapflow study STUDY.toml [--quick] [--jobs N] [--db PATH] [--dry-run]
 //   gapflow export DB --table TABLE --csv OUT.csv
 //   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots]
 //   gapflow calibrate DATA.toml [--model 2d|3d] ...   gapflow twin DATA.toml --out ... --truth ...
 //   gapflow merge OUT.sqlite SHARD.sqlite... | compare A.sqlite B.sqlite | slurm STUDY.toml [--array-size K]
+//   gapflow serve SCENARIO.toml [--model 2d|3d] [--port 8080]   (live view in a browser)
 // Exit codes: 0 success, 2 bad input (scenario or command line), 1 failure while running.
 #include "app/cli_errors.hpp"
 #include "app/cmd_calibrate.hpp"
 #include "app/cmd_cluster.hpp"
 #include "app/cmd_report.hpp"
+#include "app/cmd_serve.hpp"
 #include "app/cmd_study.hpp"
+#include "app/run_output_options.hpp"
 #include "models/registry.hpp"
 #include "common/geometry.hpp"
 #include "common/scenario_loader.hpp"
@@ -115,11 +119,14 @@ void print_replicate_table(const std::vector<RunRecord>& records) {
 }
 
 int cmd_run(const ScenarioArgs& a, const std::string& model_name, const std::string& out_path, bool quiet,
-            int replicates, int jobs) {
+            int replicates, int jobs, const RunOutputOptions& output_options) {
   const ModelKind kind = parse_model_kind(model_name);
   const CompiledScenario sc = load_and_compile(a);
+  const RunOutputDef output_def = output_options.resolved();
   if (replicates > 1) {
     if (!out_path.empty()) throw std::invalid_argument("--out writes one run record: use it without --replicates");
+    if (output_def.any())
+      throw std::invalid_argument("snapshots, --movie and --vtk show one run: use them without --replicates");
     if (!quiet)
       std::cerr << fmt::format("running {} replicates of '{}' in {} on {} worker threads...\n", replicates,
                                sc.def.name, to_string(kind), jobs);
@@ -129,7 +136,11 @@ int cmd_run(const ScenarioArgs& a, const std::string& model_name, const std::str
   if (!quiet)
     std::cerr << fmt::format("running '{}' in {} with {} particles...\n", sc.def.name, to_string(kind),
                              sc.particles.size());
-  const RunRecord record = run_model(sc, kind);
+  std::unique_ptr<RunOutputs> outputs;
+  if (output_def.any()) outputs = std::make_unique<RunOutputs>(sc, output_def);
+  const RunRecord record = run_model(sc, kind, outputs ? &outputs->observer() : nullptr);
+  if (outputs)
+    for (const std::string& line : outputs->finish()) std::cerr << line << "\n";
   write_summary(std::cout, record);
   if (!out_path.empty()) write_file_atomically(out_path, [&](std::ostream& o) { write_json(o, record); });
   return 0;
@@ -170,6 +181,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 100000));
   run->add_option("--jobs", jobs, "Worker threads for --replicates (results do not depend on it)")
       ->check(CLI::Range(1, 1024));
+  RunOutputOptions run_outputs;
+  add_run_output_options(run, run_outputs);
 
   ScenarioArgs check_args;
   bool print = false;
@@ -181,6 +194,7 @@ int main(int argc, char** argv) {
   gapflow::ReportCommand report_command(app);
   gapflow::CalibrateCommands calibrate_commands(app);
   gapflow::ClusterCommands cluster_commands(app);
+  gapflow::ServeCommand serve_command(app);
 
   try {
     app.parse(argc, argv);
@@ -195,8 +209,9 @@ int main(int argc, char** argv) {
   if (auto code = report_command.run()) return *code;
   if (auto code = calibrate_commands.run()) return *code;
   if (auto code = cluster_commands.run()) return *code;
+  if (auto code = serve_command.run()) return *code;
   return exit_code_of([&] {
-    if (*run) return cmd_run(run_args, model, out_path, quiet, replicates, jobs);
+    if (*run) return cmd_run(run_args, model, out_path, quiet, replicates, jobs, run_outputs);
     if (*check) return cmd_check(check_args, print);
     return 0;
   });

@@ -20,6 +20,17 @@ struct ActiveParticle {
   Vec2 position; // m, plane frame (lab units)
 };
 
+// Motion of one particle, for views and file writers (view/): lab units, plane frame.
+// The 2D model has no z motion: z is the sphere's radius (it rests on the board) and
+// only spin.z is set.
+struct ParticleMotion {
+  int id;           // particle index
+  Vec2 position;    // m, centre in the board plane
+  double z;         // m, centre height above the board plane
+  double vx, vy, vz;  // m/s
+  double wx, wy, wz;  // rad/s, spin
+};
+
 class EngineSession {
  public:
   virtual ~EngineSession() = default;
@@ -35,6 +46,9 @@ class EngineSession {
   virtual void zero_velocities() = 0;
   // Positions of the particles still simulated.
   virtual void active_particles(std::vector<ActiveParticle>& out) const = 0;
+  // Positions, velocities and spins of the particles still simulated (views only: the
+  // driver never calls it, so it costs nothing unless a view asks).
+  virtual void particle_motions(std::vector<ParticleMotion>& out) const = 0;
   // Remove particles from the simulation (passed far below the gap, or escaped).
   virtual void retire(const std::vector<int>& ids) = 0;
   // Move particles (never retired) to new positions, at rest: clog-breaking and

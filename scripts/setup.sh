@@ -12,6 +12,8 @@ packages=(
   python3 python3-matplotlib
   libopenmpi-dev openmpi-bin   # gapflow study --mpi (optional at build time)
   slurm-wlm munge              # scripts/slurm_local.sh: a one-node Slurm for the slow cluster test
+  libcairo2-dev ffmpeg libcpp-httplib-dev   # view/ (snapshots, movies) and gapflow serve
+  python3-vtk9 python3-pil chromium         # tests: ParaView files read back by VTK; the live view in headless Chromium
 )
 missing=()
 for p in "${packages[@]}"; do

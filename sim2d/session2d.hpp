@@ -50,6 +50,18 @@ class Session2D final : public EngineSession {
     for (int i : w_->active) out.push_back({i, w_->to_lab(w_->particles[static_cast<size_t>(i)]->GetPosition())});
   }
 
+  void particle_motions(std::vector<ParticleMotion>& out) const override {
+    out.clear();
+    out.reserve(w_->active.size());
+    const double to_v = w_->scale.to_lab_velocity(1.0), to_w = w_->scale.time;
+    for (int i : w_->active) {
+      const b2Body* b = w_->particles[static_cast<size_t>(i)];
+      const b2Vec2 v = b->GetLinearVelocity();
+      out.push_back({i, w_->to_lab(b->GetPosition()), sc_.particles[static_cast<size_t>(i)].diameter / 2, v.x * to_v,
+                     v.y * to_v, 0.0, 0.0, 0.0, b->GetAngularVelocity() * to_w});
+    }
+  }
+
   void reinject(const std::vector<ActiveParticle>& placements) override {
     for (const ActiveParticle& p : placements) {
       b2Body* b = w_->particles.at(static_cast<size_t>(p.id));

@@ -553,6 +553,17 @@ void Session3D::active_particles(std::vector<ActiveParticle>& out) const {
   }
 }
 
+void Session3D::particle_motions(std::vector<ParticleMotion>& out) const {
+  out.clear();
+  out.reserve(w_->alive);
+  for (size_t i = 0; i < w_->particles.size(); ++i) {
+    if (!w_->particles[i]) continue;
+    const int id = static_cast<int>(i);
+    const Vec3Lab x = position(id), v = velocity(id), w = angular_velocity(id);
+    out.push_back({id, {x.x, x.y}, x.z, v.x, v.y, v.z, w.x, w.y, w.z});
+  }
+}
+
 void Session3D::retire(const std::vector<int>& ids) {
   for (int id : ids) {
     if (id < 0 || id >= static_cast<int>(w_->particles.size()) || !w_->particles[id]) continue;

@@ -58,6 +58,7 @@ class Session3D final : public EngineSession {
   void step() override;
   void zero_velocities() override;
   void active_particles(std::vector<ActiveParticle>& out) const override;
+  void particle_motions(std::vector<ParticleMotion>& out) const override;
   void retire(const std::vector<int>& ids) override;
   void reinject(const std::vector<ActiveParticle>& placements) override;
 
