@@ -1,5 +1,6 @@
 #include "calibrate/data_file.hpp"
 
+#include "common/geometry.hpp"
 #include "common/text_file.hpp"
 #include "common/toml_parse.hpp"
 #include "common/toml_strict.hpp"
@@ -277,10 +278,15 @@ DataFile parse_data_file(std::string_view text, std::string_view source_name, co
   if (d.fitted_count() <= d.free.size())
     throw ScenarioError({source, 1, 1}, "point.held_out", "",
                         fmt::format("needs more fitted (not held-out) points than free parameters ({})", d.free.size()));
-  // Every point must make a valid scenario: check now, located at the point.
+  // Every point must make a valid scenario (loaded and compiled): check now, located at the point.
   for (std::size_t i = 0; i < d.points.size(); ++i) {
     try {
-      (void)d.point_scenario(i);
+      const LoadedScenario loaded = d.point_scenario(i);
+      try {
+        (void)compile_scenario(loaded.def);
+      } catch (const ScenarioInvalid& e) {
+        throw locate(e, loaded);
+      }
     } catch (const ScenarioError& e) {
       throw ScenarioError(d.points[i].where, e.key(), e.value(), fmt::format("{} [point {}]", e.allowed(), d.point_label(i)));
     }

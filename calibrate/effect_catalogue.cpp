@@ -54,6 +54,11 @@ bool effect_applies(const EffectDef& effect, ModelKind model, const DataFile& da
   return false;
 }
 
+bool key_applies_to(const std::string& key, const ScenarioDef& point) {
+  if (key != "obstruction.corner_radius_mm") return true;
+  return point.obstruction.shape == ObstructionShape::triangle || point.obstruction.shape == ObstructionShape::polygon;
+}
+
 double neutral_value(const EffectDef& effect, const DataFile& data) {
   // The canonical TOML of the resolved template holds every key that is set; keys
   // written only when set (the effects' switches) are absent at their default, 0.

@@ -36,6 +36,11 @@ const EffectDef* find_effect(const std::string& name);
 // polygonal obstruction somewhere; a free parameter of the data file is no effect).
 bool effect_applies(const EffectDef& effect, ModelKind model, const DataFile& data);
 
+// Whether setting `key` means anything at a point with this scenario: a corner
+// radius only where the obstruction has corners (elsewhere the override is left
+// out: the effect is zero there, and the loader rightly refuses the key).
+bool key_applies_to(const std::string& key, const ScenarioDef& point);
+
 // The value the data file's template (with its fixed overrides) gives the effect's
 // key: the model "without the effect".
 double neutral_value(const EffectDef& effect, const DataFile& data);

@@ -1,5 +1,7 @@
 #include "calibrate/evaluator.hpp"
 
+#include "calibrate/effect_catalogue.hpp"
+
 #include "common/geometry.hpp"
 #include "common/statistics.hpp"
 #include "common/toml_strict.hpp"
@@ -139,6 +141,8 @@ std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& set
                                             int replicates) {
   // Jobs: set x point x replicate, each with its own key.
   std::vector<Job> jobs;
+  std::vector<ScenarioDef> point_defs;
+  for (std::size_t i = 0; i < data_.points.size(); ++i) point_defs.push_back(data_.point_scenario(i).def);
   for (std::size_t s = 0; s < sets.size(); ++s)
     for (std::size_t i = 0; i < data_.points.size(); ++i)
       for (int r = 0; r < replicates; ++r) {
@@ -146,7 +150,8 @@ std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& set
         job.model = options_.model;
         job.scenario = data_.scenario;
         job.overrides = data_.point_overrides(i);
-        for (const std::string& o : sets[s].overrides()) job.overrides.push_back(o);
+        for (const auto& [key, value] : sets[s].values)
+          if (key_applies_to(key, point_defs[i])) job.overrides.push_back(key + "=" + number_text(value));
         job.overrides.push_back(fmt::format("run.seed={}", seed));
         job.overrides.push_back(fmt::format("run.replicate={}", r));
         const CompiledScenario sc = compile_job(job);

@@ -1,0 +1,183 @@
+#!/usr/bin/env python3
+"""Summary of the calibration loop's blind study (studies/calibration_blind.sh).
+
+Reads OUT/truth/<id>.json (what each twin planted; the calibration never saw it) and
+OUT/<id>/summary.json (what `gapflow calibrate` concluded), and writes OUT/report.md,
+OUT/cases.csv and OUT/confusion.png:
+
+* the confusion matrix: rows the truth (the planted effect; "none"; "two effects";
+  "outside the catalogue"; "3D model"), columns what the loop said (the effect it
+  added, a group containing it, "none" = nothing added and the residual consistent
+  with the noise, "unexplained" = a residual no catalogue effect explains, or an
+  added effect with the fit still poor);
+* identification rate of single planted effects (alone or inside a reported group);
+* coverage of the recovered sizes' 95 % intervals;
+* the null cases' false-positive rate;
+* the error on held-out points before and after (re-scored on fresh seeds), per twin.
+"""
+import csv
+import json
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def truth_label(truth):
+    planted = [p for p in truth["planted"] if p["name"] not in ("free",)]
+    if truth["model"] == "3d":
+        return "3D model", []
+    effects = [p for p in planted if p["name"] != "set"]
+    outside = [p for p in planted if p["name"] == "set"]
+    if outside:
+        return "outside the catalogue", outside
+    if not effects:
+        return "none", []
+    if len(effects) > 1:
+        return "two effects", effects
+    return effects[0]["name"], effects
+
+
+def said(summary):
+    """What the loop concluded, as (column label, list of added effects with groups)."""
+    added = summary["effects"]
+    if not added:
+        return ("none" if summary["verdict"] == "consistent with noise" else "unexplained"), added
+    if summary["poor_fit"]:
+        return "unexplained", added
+    first = added[0]
+    label = first["effect"] if len(first["group"]) <= 1 else "group{" + ",".join(first["group"]) + "}"
+    if len(added) > 1:
+        label += " + " + ", ".join(a["effect"] for a in added[1:])
+    return label, added
+
+
+def main(out):
+    out = Path(out)
+    rows = []
+    for truth_file in sorted((out / "truth").glob("*.json")):
+        case = truth_file.stem
+        summary_file = out / case / "summary.json"
+        if not summary_file.exists():
+            continue
+        truth = json.load(open(truth_file))
+        summary = json.load(open(summary_file))
+        label, planted = truth_label(truth)
+        verdict, added = said(summary)
+        found = []
+        covered = []
+        for p in planted:
+            hit = [a for a in added if p["name"] in a["group"] or p["name"] == a["effect"]]
+            found.append(bool(hit))
+            exact = [a for a in hit if a["effect"] == p["name"]]
+            if exact:
+                covered.append(exact[0]["lo95"] <= p["value"] <= exact[0]["hi95"])
+        b, a = summary["before"], summary["after"]
+        rows.append({
+            "case": case,
+            "truth": label,
+            "planted": "; ".join(f"{p['key']}={p['value']:.4g}" for p in planted),
+            "free_truth": "; ".join(f"{p['key']}={p['value']:.4g}" for p in truth["planted"] if p["name"] == "free"),
+            "said": verdict,
+            "added": "; ".join(f"{x['key']}={x['value']:.4g} [{x['lo95']:.4g}, {x['hi95']:.4g}]" for x in added),
+            "identified": all(found) if planted and label not in ("outside the catalogue", "3D model") else "",
+            "covered": "" if not covered else all(covered),
+            "n_covered": sum(covered),
+            "n_intervals": len(covered),
+            "chi2nu_before": b["fitted"]["chi2"] / max(1, b["fitted"]["dof"]),
+            "chi2nu_after": a["fitted"]["chi2"] / max(1, a["fitted"]["dof"]),
+            "heldout_rmse_before": b["held_out_fresh"]["rmse"],
+            "heldout_rmse_after": a["held_out_fresh"]["rmse"],
+            "heldout_rms_sigma_before": b["held_out_fresh"]["rms_whitened"],
+            "heldout_rms_sigma_after": a["held_out_fresh"]["rms_whitened"],
+            "runs_simulated": summary["runs_simulated"],
+            "wall_s": summary["wall_seconds"],
+        })
+    if not rows:
+        print("no finished twins yet", file=sys.stderr)
+        return
+    with open(out / "cases.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+
+    single = [r for r in rows if r["truth"] not in ("none", "two effects", "outside the catalogue", "3D model")]
+    nulls = [r for r in rows if r["truth"] == "none"]
+    outside = [r for r in rows if r["truth"] == "outside the catalogue"]
+    two = [r for r in rows if r["truth"] == "two effects"]
+    ident = sum(1 for r in single if r["identified"] is True)
+    fp = sum(1 for r in nulls if r["said"] != "none")
+    intervals = sum(r["n_intervals"] for r in rows)
+    covered = sum(r["n_covered"] for r in rows)
+    found_rows = [r for r in single + two if r["identified"] is True]
+    halved = sum(1 for r in found_rows if r["heldout_rmse_after"] is not None and r["heldout_rmse_before"]
+                 and r["heldout_rmse_after"] <= 0.5 * r["heldout_rmse_before"])
+
+    # Confusion matrix.
+    truths = sorted({r["truth"] for r in rows}, key=lambda t: (t in ("none", "two effects", "outside the catalogue", "3D model"), t))
+    cols = sorted({r["said"] for r in rows})
+    counts = {(t, c): 0 for t in truths for c in cols}
+    for r in rows:
+        counts[(r["truth"], r["said"])] += 1
+    fig, ax = plt.subplots(figsize=(1.2 + 0.9 * len(cols), 1.0 + 0.45 * len(truths)))
+    ax.imshow([[counts[(t, c)] for c in cols] for t in truths], cmap="Blues")
+    for i, t in enumerate(truths):
+        for j, c in enumerate(cols):
+            if counts[(t, c)]:
+                ax.text(j, i, counts[(t, c)], ha="center", va="center")
+    ax.set_xticks(range(len(cols)))
+    ax.set_xticklabels(cols, rotation=60, ha="right", fontsize=7)
+    ax.set_yticks(range(len(truths)))
+    ax.set_yticklabels(truths, fontsize=7)
+    ax.set_xlabel("what the loop said")
+    ax.set_ylabel("what was planted")
+    fig.tight_layout()
+    fig.savefig(out / "confusion.png", dpi=110)
+    plt.close(fig)
+
+    def pct(k, n):
+        return f"{k} of {n} ({100 * k / n:.0f} %)" if n else "none"
+
+    lines = [
+        "# Calibration loop: blind study",
+        "",
+        "Made by `studies/calibration_blind.sh` (twins of `data/blind/design.toml`, each calibrated blind with the 2D model; "
+        "this page by `/usr/bin/python3 calibrate/blind_summary.py results/calibration-blind`). Truth per twin in `truth/`, "
+        "each calibration's report data in `<case>/`, one row per twin in `cases.csv`.",
+        "",
+        f"* twins finished: {len(rows)}",
+        f"* single planted effect identified (alone, or in a reported group that contains it): {pct(ident, len(single))}",
+        f"* null twins where an effect was added: {pct(fp, len(nulls))}",
+        f"* outside-the-catalogue twins: {', '.join(r['said'] for r in outside) or 'none'}",
+        f"* two-effect twins: {', '.join(r['case'] + ' -> ' + r['said'] for r in two) or 'none'}",
+        f"* 95 % intervals of recovered sizes that contain the planted value: {pct(covered, intervals)}",
+        f"* where an effect was planted and found, held-out RMSE (fresh seeds) at least halved: {pct(halved, len(found_rows))}",
+        "",
+        "## Confusion matrix",
+        "",
+        "Rows: what was planted. Columns: what the loop said (`none`: nothing added, residual consistent with the noise; "
+        "`unexplained`: residual not explained, or an effect added while the fit stayed poor; `group{...}`: effects the design "
+        "cannot tell apart).",
+        "",
+        "| planted \\ said | " + " | ".join(cols) + " |",
+        "|---|" + "---|" * len(cols),
+    ]
+    for t in truths:
+        lines.append(f"| {t} | " + " | ".join(str(counts[(t, c)] or "") for c in cols) + " |")
+    lines += ["", "![confusion](confusion.png)", "", "## Every twin", "",
+              "Held-out RMSE on the fit scale (log: ~relative error), re-scored by direct simulation on fresh seeds.", "",
+              "| case | planted | friction (truth) | said | added [95 %] | chi2/nu before -> after | held-out RMSE before -> after | runs | wall s |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['case']} | {r['planted'] or '-'} | {r['free_truth']} | {r['said']} | {r['added'] or '-'} | "
+                     f"{r['chi2nu_before']:.2f} -> {r['chi2nu_after']:.2f} | {r['heldout_rmse_before']:.4f} -> "
+                     f"{r['heldout_rmse_after']:.4f} | {r['runs_simulated']} | {r['wall_s']:.0f} |")
+    open(out / "report.md", "w").write("\n".join(lines) + "\n")
+    print("\n".join(lines[:16]))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1] if len(sys.argv) > 1 else "results/calibration-blind")

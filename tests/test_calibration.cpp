@@ -1,0 +1,326 @@
+// The calibration loop: attribution statistics on synthetic linear problems with
+// known answers, the strict data-file loader, and end-to-end calibrations of tiny
+// 2D twins (a planted effect recovered, a null twin left alone, interrupt + resume).
+#include "calibrate/attribution.hpp"
+#include "calibrate/calibration.hpp"
+#include "calibrate/data_file.hpp"
+#include "calibrate/effect_catalogue.hpp"
+#include "calibrate/evaluator.hpp"
+#include "calibrate/twin.hpp"
+#include "common/random.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <thread>
+
+namespace gapflow {
+namespace {
+
+using testing::source_path;
+using testing::TempDir;
+
+// n points, a noise vector drawn from a fixed seed.
+Eigen::VectorXd noise(int n, std::uint64_t seed) {
+  RandomStream rng(seed);
+  Eigen::VectorXd v(n);
+  for (int i = 0; i < n; ++i) v(i) = rng.normal();
+  return v;
+}
+
+Eigen::VectorXd ramp(int n, double a, double b) {
+  Eigen::VectorXd v(n);
+  for (int i = 0; i < n; ++i) v(i) = a + b * i / (n - 1.0);
+  return v;
+}
+
+TEST(Attribution, ScorePicksThePlantedSignature) {
+  const int n = 12;
+  const Eigen::VectorXd level = Eigen::VectorXd::Constant(n, 1.0);  // a calibrated offset
+  Eigen::MatrixXd X(n, 1);
+  X.col(0) = level;
+  const Eigen::VectorXd slope = ramp(n, -1, 1), bump = ramp(n, -1, 1).array().square() - 1.0 / 3;
+  // Residual after the baseline fit: 2.5 x the bump (planted), plus unit noise.
+  const Eigen::VectorXd r = projector_out(X) * (2.5 * bump + noise(n, 7));
+  const Score s_bump = score_signature(r, X, bump), s_slope = score_signature(r, X, slope);
+  EXPECT_GT(s_bump.statistic, s_slope.statistic);
+  EXPECT_LT(s_bump.p, 0.01);
+  EXPECT_NEAR(s_bump.estimate, 2.5, 3 * s_bump.se);  // the linearised size within 3 se
+}
+
+TEST(Attribution, ProjectionRemovesTheCalibratedDirection) {
+  const int n = 10;
+  Eigen::MatrixXd X(n, 1);
+  X.col(0) = ramp(n, 0, 1);
+  // A signature that is the calibrated direction plus a little else: only the little is left.
+  const Eigen::VectorXd other = noise(n, 3);
+  const Eigen::VectorXd u = 5.0 * X.col(0) + 0.1 * other;
+  const Eigen::VectorXd pu = projector_out(X) * u;
+  EXPECT_NEAR(pu.dot(X.col(0)), 0.0, 1e-9);
+  EXPECT_LT(pu.norm(), 0.1 * other.norm() + 1e-12);
+  // A residual along the calibrated direction gives the signature no score.
+  EXPECT_NEAR(score_signature(X.col(0) * 3.0, X, u).statistic, 0.0, 1e-9);
+}
+
+TEST(Attribution, CollinearSignaturesFormOneGroup) {
+  const int n = 9;
+  const Eigen::MatrixXd X(n, 0);
+  const Eigen::VectorXd a = ramp(n, 1, 2), b = 3.0 * ramp(n, 1, 2) + 0.01 * noise(n, 5), c = noise(n, 11);
+  const auto groups = indistinguishable_groups({a, b, c}, X, 0.9);
+  ASSERT_EQ(groups.size(), 2u);
+  EXPECT_EQ(groups[0], (std::vector<int>{0, 1}));
+  EXPECT_EQ(groups[1], (std::vector<int>{2}));
+  // Projecting out a shared direction can make two signatures distinguishable (and vice versa).
+  EXPECT_GT(abs_cosine(a, b), 0.99);
+}
+
+TEST(Attribution, BicKeepsARealEffectAndRejectsANullOne) {
+  const int n = 12;
+  const Eigen::VectorXd u = ramp(n, -1, 1);
+  for (double planted : {0.0, 1.5}) {
+    int kept = 0;
+    for (std::uint64_t seed = 1; seed <= 200; ++seed) {
+      const Eigen::VectorXd r = planted * u + noise(n, seed);
+      const double chi2_without = r.squaredNorm();
+      const double a = u.dot(r) / u.squaredNorm();
+      const double chi2_with = (r - a * u).squaredNorm();
+      kept += bic(chi2_with, 1, n) < bic(chi2_without, 0, n) ? 1 : 0;
+    }
+    if (planted == 0.0) {
+      EXPECT_LT(kept, 200 * 0.15);  // chi^2_1 > ln 12 = 2.48: ~11.5 % nominally
+    } else {
+      EXPECT_GT(kept, 200 * 0.9);
+    }
+  }
+}
+
+TEST(Attribution, ChiSquareOfWhitenedResidual) {
+  Eigen::VectorXd r(4);
+  r << 1, -1, 2, 0;
+  const ChiSquare c = chi_square_of(r, 1);
+  EXPECT_DOUBLE_EQ(c.chi2, 6.0);
+  EXPECT_EQ(c.dof, 3);
+  EXPECT_NEAR(c.p, 0.1116, 1e-4);  // 1 - F_chi2(6; 3)
+}
+
+// ---------------------------------------------------------------------------
+// Data files.
+
+const char* kDataHead = R"(
+[data]
+name = "t"
+[source]
+citation = "test"
+method = "simulated"
+uncertainty = "se of 10 runs"
+[model]
+scenario = "scenarios/paper/no_obstruction_medium.toml"
+set = ["particles.count=40"]
+[observable]
+kind = "j_mid"
+[[design]]
+column = "W_over_d"
+key = "bottleneck.gap_mm"
+unit = "d"
+)";
+
+DataFile parse(const std::string& tail) {
+  return parse_data_file(std::string(kDataHead) + tail, "t.toml", source_path(""));
+}
+
+TEST(DataFile, LoadsInlinePointsAndConvertsDiameters) {
+  const DataFile d = parse("[[point]]\nW_over_d = 4\nvalue = 80\nuncertainty = 2\n"
+                           "[[point]]\nW_over_d = 5\nvalue = 100\nuncertainty = 2\nheld_out = true\n");
+  ASSERT_EQ(d.points.size(), 2u);
+  EXPECT_EQ(d.fitted_count(), 1u);
+  EXPECT_EQ(d.scale, FitScale::log);
+  EXPECT_NEAR(d.point_scenario(0).def.bottleneck.gap_mm, 4 * 7.75, 1e-9);
+  EXPECT_NEAR(d.points[1].se, 2.0, 1e-12);
+}
+
+// The error names the key and the line.
+void expect_error(const std::string& tail, const std::string& key, int line) {
+  try {
+    (void)parse(tail);
+    FAIL() << "accepted: " << tail;
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.key(), key) << e.what();
+    if (line > 0) {
+      EXPECT_EQ(e.where().line, line) << e.what();
+    }
+  }
+}
+
+TEST(DataFile, MalformedFilesAreRejectedWithKeyAndLine) {
+  const int head_lines = 16;  // kDataHead has 16 lines (the first is empty)
+  const std::string p1 = "[[point]]\nW_over_d = 4\nvalue = 80\nuncertainty = 2\n";
+  expect_error(p1 + p1 + "[[point]]\nW_over_d = 4\nvalue = 80\nuncertanty = 2\n", "point.uncertanty", head_lines + 12);
+  expect_error(p1 + "[[point]]\nvalue = 80\nuncertainty = 2\n", "point.W_over_d", head_lines + 5);
+  expect_error(p1 + "[[point]]\nW_over_d = 4\nvalue = -1\nuncertainty = 2\n", "point.value", head_lines + 7);
+  expect_error(p1 + p1 + "[[free]]\nkey = \"particles.friction_particle\"\nlo = 0.5\nhi = 0.1\n", "free.hi", head_lines + 12);
+  expect_error(p1 + p1 + "[colour]\nx = 1\n", "colour", 0);
+  expect_error(p1 + p1 + "[[free]]\nkey = \"run.seed\"\nlo = 0\nhi = 1\n", "free.key", 0);
+  // A design value the scenario refuses is located at its point.
+  expect_error(p1 + "[[point]]\nW_over_d = 400\nvalue = 80\nuncertainty = 2\n", "bottleneck.gap_mm", head_lines + 5);
+}
+
+TEST(DataFile, CsvPointsAreCheckedLikeInlineOnes) {
+  TempDir dir("gapflow_datafile");
+  std::ofstream(dir / "p.csv") << "# comment\nW_over_d,value,uncertainty\n4,80,2\n5,oops,2\n";
+  const std::string text = std::string(kDataHead) + "[points]\ncsv = \"" + (dir / "p.csv").string() + "\"\n";
+  try {
+    (void)parse_data_file(text, "t.toml", source_path(""));
+    FAIL();
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.where().line, 4) << e.what();
+    EXPECT_EQ(e.key(), "point.value") << e.what();
+  }
+}
+
+TEST(DataFile, ShippedFilesLoadWithProvenance) {
+  for (const char* f : {"data/examples/gap_sweep_design.toml", "data/blind/design.toml"}) {
+    const DataFile d = load_data_file(source_path(f));
+    EXPECT_FALSE(d.source.citation.empty()) << f;
+    EXPECT_FALSE(d.source.method.empty()) << f;
+    EXPECT_FALSE(d.source.uncertainty.empty()) << f;
+    EXPECT_GE(d.points.size(), 10u) << f;
+  }
+}
+
+TEST(EffectCatalogue, EveryEntryIsAScenarioKeyWithARangeAndAStep) {
+  const DataFile d = load_data_file(source_path("data/blind/design.toml"));
+  for (const EffectDef& e : effect_catalogue()) {
+    EXPECT_LT(e.lo, e.hi) << e.name;
+    EXPECT_NE(e.step, 0) << e.name;
+    EXPECT_LE(std::abs(e.step), e.hi - e.lo) << e.name;
+    EXPECT_TRUE(effect_applies(e, ModelKind::box2d, d)) << e.name;  // the blind design has a V: corners apply too
+    // The key is real: a V point accepts it at a value inside the range.
+    const double v = std::clamp(neutral_value(e, d) + e.step, e.lo, e.hi);
+    EXPECT_NO_THROW((void)d.point_scenario(9, {e.key + "=" + std::to_string(v)})) << e.name;
+  }
+}
+
+// ---------------------------------------------------------------------------
+// End to end on a tiny 2D design: 60 spheres, 4 points, no free parameter.
+
+const char* kTinyDesign = R"(
+[data]
+name = "tiny"
+[source]
+citation = "test design"
+method = "simulated"
+uncertainty = "placeholders"
+[model]
+scenario = "scenarios/paper/no_obstruction_medium.toml"
+set = ["particles.count=60", "release.settle_s=0.2", "run.time_limit_s=15", "run.stop_after_no_flow_s=5"]
+replicates = 3
+[observable]
+kind = "j_mid"
+floor_relative = 0.005
+[[design]]
+column = "W_over_d"
+key = "bottleneck.gap_mm"
+unit = "d"
+[[design]]
+column = "incline_deg"
+key = "plane.incline_deg"
+[[point]]
+W_over_d = 4
+incline_deg = 5
+value = 1
+uncertainty = 1
+[[point]]
+W_over_d = 5
+incline_deg = 8
+value = 1
+uncertainty = 1
+[[point]]
+W_over_d = 4
+incline_deg = 12
+value = 1
+uncertainty = 1
+[[point]]
+W_over_d = 5
+incline_deg = 12
+value = 1
+uncertainty = 1
+held_out = true
+)";
+
+struct TinyRun {
+  CalibrationResult result;
+  TwinTruth truth;
+};
+
+TinyRun tiny_calibration(const TempDir& dir, const std::vector<std::string>& effects, std::uint64_t seed,
+                         const std::atomic<bool>* cancel = nullptr) {
+  const DataFile design = parse_data_file(kTinyDesign, "tiny.toml", source_path(""));
+  Store twin_store(dir / "twin.sqlite");
+  EvaluatorOptions eo;
+  eo.workers = 2;
+  Evaluator twin_ev(design, twin_store, eo);
+  TwinDef def;
+  def.name = "tiny-twin";
+  def.seed = seed;
+  def.effects = effects;
+  def.replicates = 6;
+  const auto twin_file = dir / ("twin" + std::to_string(seed) + ".toml");
+  TwinTruth truth = std::filesystem::exists(twin_file) ? draw_twin(design, def)
+                                                       : make_twin(design, def, twin_ev, twin_file, dir / ("truth" + std::to_string(seed) + ".json"));
+  const DataFile data = load_data_file(twin_file);
+  Store store(dir / "cal.sqlite");
+  eo.cancel = cancel;
+  Evaluator ev(data, store, eo);
+  CalibrationDef cd;
+  return {calibrate(data, cd, ev), truth};
+}
+
+TEST(CalibrationEndToEnd, RecoversAPlantedDragAndLeavesANullTwinAlone) {
+  TempDir dir("gapflow_calibration");
+  const TinyRun planted = tiny_calibration(dir, {"linear_drag=5"}, 21);
+  ASSERT_FALSE(planted.result.effects.empty()) << planted.result.verdict;
+  const AddedEffect& e = planted.result.effects.front();
+  const bool in_group = std::find(e.group.begin(), e.group.end(), "linear_drag") != e.group.end();
+  EXPECT_TRUE(e.effect == "linear_drag" || in_group) << e.effect;
+  EXPECT_LT(planted.result.after.fitted.chi.chi2, planted.result.before.fitted.chi.chi2);
+
+  const TinyRun null = tiny_calibration(dir, {}, 22);
+  EXPECT_TRUE(null.result.effects.empty()) << null.result.effects.front().effect;
+}
+
+TEST(CalibrationEndToEnd, InterruptedAndResumedEqualsUninterrupted) {
+  TempDir whole("gapflow_calibration_whole"), parts("gapflow_calibration_parts");
+  const TinyRun uninterrupted = tiny_calibration(whole, {"linear_drag=5"}, 23);
+  // Interrupt after some runs are stored, then run again on the same store.
+  std::atomic<bool> cancel{false};
+  std::thread stopper([&] {
+    for (int i = 0; i < 400 && !cancel; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      if (std::filesystem::exists(parts / "cal.sqlite") && Store(parts / "cal.sqlite").count() >= 20) cancel = true;
+    }
+  });
+  bool interrupted = false;
+  try {
+    (void)tiny_calibration(parts, {"linear_drag=5"}, 23, &cancel);
+  } catch (const RunCancelled&) {
+    interrupted = true;
+  }
+  cancel = true;
+  stopper.join();
+  EXPECT_TRUE(interrupted);
+  const TinyRun resumed = tiny_calibration(parts, {"linear_drag=5"}, 23);
+  EXPECT_GT(resumed.result.runs_reused, 0);
+  EXPECT_EQ(resumed.result.verdict, uninterrupted.result.verdict);
+  ASSERT_EQ(resumed.result.effects.size(), uninterrupted.result.effects.size());
+  for (std::size_t i = 0; i < resumed.result.effects.size(); ++i) {
+    EXPECT_EQ(resumed.result.effects[i].effect, uninterrupted.result.effects[i].effect);
+    EXPECT_DOUBLE_EQ(resumed.result.effects[i].value, uninterrupted.result.effects[i].value);
+    EXPECT_DOUBLE_EQ(resumed.result.effects[i].lo95, uninterrupted.result.effects[i].lo95);
+  }
+  EXPECT_DOUBLE_EQ(resumed.result.after.fitted.chi.chi2, uninterrupted.result.after.fitted.chi.chi2);
+  EXPECT_DOUBLE_EQ(resumed.result.after.held_out_fresh.chi.chi2, uninterrupted.result.after.held_out_fresh.chi.chi2);
+}
+
+}  // namespace
+}  // namespace gapflow
