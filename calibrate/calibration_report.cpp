@@ -2,7 +2,9 @@
 
 #include "calibrate/effect_catalogue.hpp"
 #include "calibrate/fit.hpp"
+#include "common/json_text.hpp"
 #include "common/text_file.hpp"
+#include "studies/report.hpp"
 
 #include <fmt/format.h>
 
@@ -17,21 +19,6 @@
 namespace gapflow {
 
 namespace {
-
-std::string json_string(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (c == '\n') {
-      o += "\\n";
-      continue;
-    }
-    o += c;
-  }
-  return o + "\"";
-}
-
-std::string json_number(double v) { return std::isfinite(v) ? fmt::format("{}", v) : "null"; }
 
 std::string json_errors(const ErrorMeasures& e) {
   return fmt::format(R"({{"n": {}, "rmse": {}, "rms_whitened": {}, "chi2": {}, "dof": {}, "p": {}, "invalid": {}}})", e.n,
@@ -171,9 +158,10 @@ void write_calibration_outputs(const DataFile& data, const CalibrationResult& re
   write_file_atomically(dir / "report.md", [&](std::ostream& o) { write_report_md(o, data, result); });
   if (!plots) return;
   const char* env = std::getenv("GAPFLOW_CALIBRATION_PLOT_SCRIPT");
-  const std::string script = env ? env : GAPFLOW_CALIBRATION_PLOT_SCRIPT;
-  const std::string cmd = fmt::format("/usr/bin/python3 '{}' '{}'", script, dir.string());
-  if (std::system(cmd.c_str()) != 0) std::cerr << "calibrate: plots were not drawn (" << cmd << " failed)\n";
+  const std::string script = env && *env ? env : GAPFLOW_CALIBRATION_PLOT_SCRIPT;
+  const std::optional<std::string> python = find_python_with_matplotlib();
+  if (!python || run_program({*python, script, dir.string()}, dir / "plots.log") != 0)
+    std::cerr << "calibrate: plots were not drawn (" << (python ? "see " + (dir / "plots.log").string() : "no python3 with matplotlib") << ")\n";
 }
 
 }  // namespace gapflow
