@@ -71,7 +71,7 @@ std::filesystem::path db_path(const StudyCommands::Options& o, const StudyDef& s
 
 void print_dry_run(const StudyDef& study, const std::vector<Job>& jobs, const std::filesystem::path& db) {
   std::set<std::string> stored;
-  if (std::filesystem::exists(db)) stored = Store(db).keys();
+  if (std::filesystem::exists(db)) stored = Store(db, StoreAccess::read).keys();
   // (series, model) -> jobs, stored; in job order.
   std::vector<std::pair<std::string, std::string>> order;
   std::map<std::pair<std::string, std::string>, std::pair<int, int>> count;
@@ -123,7 +123,7 @@ int cmd_study(const StudyCommands::Options& o) {
     print_dry_run(study, jobs, db);
     return 0;
   }
-  Store store(db);
+  Store store(db, StoreAccess::exclusive);  // a second study on this store refuses here
   // The report reads the study's [report] settings from the store (gapflow report RESULTS).
   if (const auto text = read_text_file(o.study_file)) store.record_study_file(study.name, o.study_file, *text);
   std::cerr << fmt::format("study '{}'{}: {} jobs on {} worker threads, store {}\n", study.name,
@@ -152,8 +152,7 @@ int cmd_study(const StudyCommands::Options& o) {
 }
 
 int cmd_export(const StudyCommands::Options& o) {
-  if (!std::filesystem::exists(o.export_db)) throw std::invalid_argument("no results store at " + o.export_db);
-  const Store store(o.export_db);
+  const Store store(o.export_db, StoreAccess::read);
   if (o.csv == "-") {
     store.export_csv(o.table, std::cout);
     return 0;
