@@ -3,12 +3,11 @@
 #include "common/geometry.hpp"
 #include "common/input_bounds.hpp"
 #include "common/random.hpp"
+#include "common/text_file.hpp"
 
 #include <fmt/format.h>
 
-#include <fstream>
 #include <map>
-#include <sstream>
 
 namespace gapflow {
 
@@ -80,13 +79,12 @@ PointSpec point_spec(const StudyDef& study, const SeriesDef& s, const Point& p) 
 }
 
 std::string read_scenario_text(const SeriesDef& s) {
-  std::ifstream in(s.scenario, std::ios::binary);
-  if (!in)
+  try {
+    return read_input_file(s.scenario, "scenario file");  // bounded: a series may name /dev/zero
+  } catch (const FileError& e) {
     throw ScenarioError(s.scenario_where, "series.scenario", "\"" + s.scenario.string() + "\"",
-                        fmt::format("cannot open the scenario file (relative to the study file) [series '{}']", s.label));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+                        fmt::format("{} (relative to the study file) [series '{}']", e.reason(), s.label));
+  }
 }
 
 // Re-throw a scenario error at the study-file location of the override that
