@@ -362,7 +362,12 @@ sqlite3* open_read_only(const std::filesystem::path& file) {
   sqlite3* db = open_sqlite(file.string(), SQLITE_OPEN_READONLY);
   if (sqlite3_exec(db, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr) == SQLITE_OK) return db;
   const int code = sqlite3_errcode(db) & 0xff;
-  if (code != SQLITE_CANTOPEN && code != SQLITE_READONLY) fail(db, "reading the schema");
+  if (code != SQLITE_CANTOPEN && code != SQLITE_READONLY) {
+    const std::string why = fmt::format("results store {} is damaged or not a results store: {}", file.string(),
+                                        sqlite3_errmsg(db));
+    sqlite3_close(db);
+    throw StoreError(why);
+  }
   sqlite3_close(db);
   std::error_code ec;
   if (std::filesystem::exists(file.string() + "-wal", ec))
@@ -371,14 +376,28 @@ sqlite3* open_read_only(const std::filesystem::path& file) {
                                  file.string(), file.string()));
   const std::string uri = "file:" + std::filesystem::absolute(file).string() + "?immutable=1";
   db = open_sqlite(uri, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
-  if (sqlite3_exec(db, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr) != SQLITE_OK)
-    fail(db, "reading the schema");
+  if (sqlite3_exec(db, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr) != SQLITE_OK) {
+    const std::string why = fmt::format("results store {} is damaged or not a results store: {}", file.string(),
+                                        sqlite3_errmsg(db));
+    sqlite3_close(db);
+    throw StoreError(why);
+  }
   return db;
 }
 
 }  // namespace
 
 Store::Store(const std::filesystem::path& file, StoreAccess access) {
+  try {
+    open(file, access);
+  } catch (...) {
+    sqlite3_close(db_);  // the destructor does not run when a constructor throws
+    db_ = nullptr;
+    throw;
+  }
+}
+
+void Store::open(const std::filesystem::path& file, StoreAccess access) {
   const bool exists = check_store_file(file);
   if (access == StoreAccess::read) {
     if (!exists) throw StoreError(fmt::format("no results store at {}: no such file", file.string()));

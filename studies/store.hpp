@@ -91,6 +91,7 @@ class Store {
   static const std::vector<std::string>& tables();  // runs, crossings, avalanches, clogs, study_files
 
  private:
+  void open(const std::filesystem::path& file, StoreAccess access);
   class WriterLock;
   std::unique_ptr<WriterLock> lock_;  // held while open with StoreAccess::exclusive
   sqlite3* db_ = nullptr;
