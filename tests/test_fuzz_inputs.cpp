@@ -2,7 +2,7 @@
 // command line: every mutant must end in exit 0 or 2 within the time bound, never a
 // signal (crash, abort), exit 1 or a hang (killed by `timeout`, 137).
 //
-//   default (CI):  kDefaultCases cases, seed 1, ~15 s on one core
+//   default (CI):  kDefaultCases cases, seed 1, ~10 s on one core
 //   on demand:     GAPFLOW_FUZZ_CASES=5000 GAPFLOW_FUZZ_SEED=7 build/tests/gapflow_tests --gtest_filter='Fuzz*'
 //
 // A failing mutant is written to tests/fuzz_corpus/found_<seed>_<case>.toml (the message
@@ -33,7 +33,7 @@ using testing::shell_quoted;
 using testing::source_path;
 using testing::TempDir;
 
-constexpr int kDefaultCases = 200;
+constexpr int kDefaultCases = 120;
 constexpr int kTimeBoundS = 20;  // far above any check or --dry-run of a shipped file (< 0.3 s)
 
 int env_int(const char* name, int fallback) {
