@@ -47,7 +47,7 @@ int cmd_calibrate(const CalibrateCommands::Options& o) {
   CalibrationDef def;
   def.model = parse_model_kind(o.model);
   def.max_effects = o.max_effects;
-  Store store(db);
+  Store store(db, StoreAccess::exclusive);  // one calibration or twin per store at a time
   g_cancel.store(false);
   CancelOnSignal signals;
   Evaluator ev(data, store, evaluator_options(o));
@@ -84,7 +84,7 @@ int cmd_twin(const CalibrateCommands::Options& o) {
   (void)draw_twin(design, def);  // bad effect names and sizes are input errors, before anything runs
   const std::filesystem::path db = o.db.empty() ? std::filesystem::path(o.out).parent_path() / "twin_runs.sqlite"
                                                 : std::filesystem::path(o.db);
-  Store store(db);
+  Store store(db, StoreAccess::exclusive);  // one calibration or twin per store at a time
   g_cancel.store(false);
   CancelOnSignal signals;
   Evaluator ev(design, store, evaluator_options(o));

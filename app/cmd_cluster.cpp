@@ -40,7 +40,7 @@ int cmd_merge(const ClusterCommands::Options& o) {
   std::vector<fs::path> sources(o.sources.begin(), o.sources.end());
   for (const auto& s : sources)  // checked before OUT is created
     if (!fs::is_regular_file(s)) throw std::invalid_argument("merge: no results store at " + s.string());
-  Store out(o.out);
+  Store out(o.out, StoreAccess::exclusive);
   const MergeSummary m = merge_stores(out, sources);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << fmt::format("merged {} stores into {} in {:.2f} s: {} runs added, {} already there (identical), "
@@ -65,7 +65,7 @@ int cmd_merge(const ClusterCommands::Options& o) {
 int cmd_compare(const ClusterCommands::Options& o) {
   for (const auto& f : {o.first, o.second})
     if (!fs::is_regular_file(f)) throw std::invalid_argument("compare: no results store at " + f);
-  const Store a(o.first), b(o.second);
+  const Store a(o.first, StoreAccess::read), b(o.second, StoreAccess::read);
   const std::vector<std::string> differences = compare_stores(a, b);
   for (const std::string& d : differences) std::cout << d << "\n";
   std::cout << fmt::format("{} and {}: {} runs and {} runs, {}\n", o.first, o.second, a.count(), b.count(),

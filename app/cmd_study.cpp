@@ -56,7 +56,7 @@ std::filesystem::path db_path(const StudyCommands::Options& o, const StudyDef& s
 // --status: every job of the study (or of the share) by key, done or missing in the store.
 int print_status(const std::vector<Job>& jobs, const std::filesystem::path& db) {
   std::set<std::string> stored;
-  if (std::filesystem::exists(db)) stored = Store(db).keys();
+  if (std::filesystem::exists(db)) stored = Store(db, StoreAccess::read).keys();
   int done = 0;
   for (const Job& j : jobs) {
     const bool is_done = stored.count(j.id.key) > 0;
@@ -71,7 +71,7 @@ int print_status(const std::vector<Job>& jobs, const std::filesystem::path& db) 
 
 void print_dry_run(const StudyDef& study, const std::vector<Job>& jobs, const std::filesystem::path& db) {
   std::set<std::string> stored;
-  if (std::filesystem::exists(db)) stored = Store(db).keys();
+  if (std::filesystem::exists(db)) stored = Store(db, StoreAccess::read).keys();
   // (series, model) -> jobs, stored; in job order.
   std::vector<std::pair<std::string, std::string>> order;
   std::map<std::pair<std::string, std::string>, std::pair<int, int>> count;
@@ -140,7 +140,7 @@ int cmd_study(const StudyCommands::Options& o) {
     mpi->worker_loop(&g_cancel);
     return 0;
   }
-  Store store(db);
+  Store store(db, StoreAccess::exclusive);  // a second study on this store refuses here
   // The report reads the study's [report] settings from the store (gapflow report RESULTS).
   if (const auto text = read_text_file(o.study_file)) store.record_study_file(study.name, o.study_file, *text);
   if (shard) {  // the whole job list, so that a merge of the shares can say which jobs are missing
@@ -183,8 +183,7 @@ int cmd_study(const StudyCommands::Options& o) {
 }
 
 int cmd_export(const StudyCommands::Options& o) {
-  if (!std::filesystem::exists(o.export_db)) throw std::invalid_argument("no results store at " + o.export_db);
-  const Store store(o.export_db);
+  const Store store(o.export_db, StoreAccess::read);
   if (o.csv == "-") {
     store.export_csv(o.table, std::cout);
     return 0;

@@ -8,7 +8,8 @@
 //   gapflow calibrate DATA.toml [--model 2d|3d] ...   gapflow twin DATA.toml --out ... --truth ...
 //   gapflow merge OUT.sqlite SHARD.sqlite... | compare A.sqlite B.sqlite | slurm STUDY.toml [--array-size K]
 //   gapflow serve SCENARIO.toml [--model 2d|3d] [--port 8080]   (live view in a browser)
-// Exit codes: 0 success, 2 bad input (scenario or command line), 1 failure while running.
+// Exit codes: 0 success, 2 bad input (scenario, study, store, paths, command line), 1 failure while
+// running (including lost standard output and runs whose particles escaped), 130 interrupted study.
 #include "app/cli_errors.hpp"
 #include "app/cmd_calibrate.hpp"
 #include "app/cmd_cluster.hpp"
@@ -130,9 +131,16 @@ int cmd_run(const ScenarioArgs& a, const std::string& model_name, const std::str
     if (!quiet)
       std::cerr << fmt::format("running {} replicates of '{}' in {} on {} worker threads...\n", replicates,
                                sc.def.name, to_string(kind), jobs);
-    print_replicate_table(run_replicates(a, kind, replicates, jobs));
-    return 0;
+    const std::vector<RunRecord> records = run_replicates(a, kind, replicates, jobs);
+    print_replicate_table(records);
+    int invalid = 0;
+    for (const RunRecord& r : records) invalid += invalid_run_reason(r) ? 1 : 0;
+    if (invalid == 0) return 0;
+    std::cerr << fmt::format("error: {} of {} replicates are not valid discharges (particles escaped)\n", invalid,
+                             records.size());
+    return kExitFailure;
   }
+  if (!out_path.empty()) check_output_file(out_path);  // before the simulation, not after it
   if (!quiet)
     std::cerr << fmt::format("running '{}' in {} with {} particles...\n", sc.def.name, to_string(kind),
                              sc.particles.size());
@@ -143,6 +151,10 @@ int cmd_run(const ScenarioArgs& a, const std::string& model_name, const std::str
     for (const std::string& line : outputs->finish()) std::cerr << line << "\n";
   write_summary(std::cout, record);
   if (!out_path.empty()) write_file_atomically(out_path, [&](std::ostream& o) { write_json(o, record); });
+  if (auto why = invalid_run_reason(record)) {
+    std::cerr << "error: " << *why << "\n";
+    return kExitFailure;
+  }
   return 0;
 }
 
@@ -205,14 +217,21 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   }
 
-  if (auto code = study_commands.run()) return *code;
-  if (auto code = report_command.run()) return *code;
-  if (auto code = calibrate_commands.run()) return *code;
-  if (auto code = cluster_commands.run()) return *code;
-  if (auto code = serve_command.run()) return *code;
-  return exit_code_of([&] {
+  int code = 0;
+  if (auto c = study_commands.run()) code = *c;
+  else if (auto c = report_command.run()) code = *c;
+  else if (auto c = calibrate_commands.run()) code = *c;
+  else if (auto c = cluster_commands.run()) code = *c;
+  else if (auto c = serve_command.run()) code = *c;
+  else code = exit_code_of([&] {
     if (*run) return cmd_run(run_args, model, out_path, quiet, replicates, jobs, run_outputs);
     if (*check) return cmd_check(check_args, print);
     return 0;
   });
+  // Output lost on the way (`> /dev/full`, a closed pipe) must not pass for success.
+  if (auto why = flush_stdout()) {
+    std::cerr << "error: cannot write to standard output: " << *why << "\n";
+    if (code == 0) code = kExitFailure;
+  }
+  return code;
 }

@@ -3,6 +3,7 @@
 // -> pack particles. Every failed check names the scenario key to change.
 #include "common/geometry.hpp"
 
+#include "common/input_bounds.hpp"
 #include "common/random.hpp"
 #include "common/scenario_loader.hpp"
 #include "common/units.hpp"
@@ -77,7 +78,8 @@ void build_walls(CompiledScenario& c) {
   c.funnel_height = flat ? 0.0 : run / std::tan(c.wall_angle);
   if (c.funnel_height + 2 * c.nominal_diameter >= c.plane_length)
     throw ScenarioInvalid("plane.length_mm", num(d.plane.length_mm),
-                          fmt::format("must exceed the bottleneck height {:.1f} mm by at least 2 d",
+                          fmt::format("must exceed the bottleneck height {:.6g} mm (from plane.width_mm, "
+                                      "bottleneck.gap_mm and bottleneck.wall_angle_deg) by at least 2 d",
                                       c.funnel_height * 1e3));
 
   // Right wall: inner face from the right gap tip up-and-out to the retaining wall;
@@ -194,8 +196,21 @@ double distance_obstruction_to(const ObstructionGeometry& g, const ConvexPolygon
   return d < 0 ? d : d - g.corner_radius;
 }
 
+// The obstruction's centre must lie on the open board: between the retaining walls and
+// inside the funnel (with the overlap check below, the whole obstruction then does).
+void check_obstruction_on_board(const CompiledScenario& c) {
+  const Vec2 centre = c.obstruction.centroid;
+  if (std::abs(centre.x) < c.channel_width / 2 && clearance_to_bottleneck_walls(c, centre) > 0) return;
+  const ObstructionDef& o = c.def.obstruction;
+  throw ScenarioInvalid("obstruction.lateral_offset_mm", num(o.lateral_offset_mm),
+                        fmt::format("puts the obstruction's centre (x = {:.6g} mm, y = {:.6g} mm) outside the board "
+                                    "(|x| < plane.width_mm / 2 = {:.6g} mm, above the funnel walls)",
+                                    centre.x * 1e3, centre.y * 1e3, c.channel_width / 2 * 1e3));
+}
+
 void check_obstruction_clearance(const CompiledScenario& c) {
   if (c.obstruction.shape == ObstructionShape::none) return;
+  check_obstruction_on_board(c);
   const double clearance = obstruction_wall_clearance(c);
   if (clearance <= 0)
     throw ScenarioInvalid("obstruction.distance_mm", num(c.def.obstruction.distance_mm),
@@ -244,7 +259,17 @@ void pack_particles(CompiledScenario& c) {
 
   c.particles.clear();
   c.particles.reserve(p.count);
+  // A board many thousands of diameters wide would be scanned site by site for ever:
+  // the scan is bounded (kMaxPackingSites) and the limit reported.
+  const std::int64_t sites_per_row = 2 * (static_cast<std::int64_t>(std::min(w2 / a, 1e12)) + 2) + 1;
+  std::int64_t scanned = 0;
   for (int row = 0; static_cast<int>(c.particles.size()) < p.count; ++row) {
+    scanned += sites_per_row;
+    if (scanned > kMaxPackingSites)
+      throw ScenarioInvalid("particles.diameter_mm", num(p.diameter_mm),
+                            fmt::format("the packing would scan more than {} lattice sites (plane.width_mm / d = "
+                                        "{:.6g}): use larger particles or a smaller board",
+                                        kMaxPackingSites, c.channel_width / c.nominal_diameter));
     const double y = c.barrier_y + a / 2 + row * row_pitch;
     if (y > c.plane_length - a / 2) {
       throw ScenarioInvalid(

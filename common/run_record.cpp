@@ -121,6 +121,13 @@ std::string rate(const std::optional<double>& j, double d) {
 }
 }  // namespace
 
+std::optional<std::string> invalid_run_reason(const RunRecord& r) {
+  if (r.escaped == 0) return std::nullopt;
+  return fmt::format("{} of {} particles escaped (left the board elsewhere than through the gap): this run is not a "
+                     "discharge, and its J and regime mean nothing",
+                     r.escaped, r.particles);
+}
+
 void write_summary(std::ostream& out, const RunRecord& r) {
   int clogs_complete = 0;
   for (const Clog& c : r.clogs) clogs_complete += c.censored ? 0 : 1;
@@ -137,6 +144,7 @@ void write_summary(std::ostream& out, const RunRecord& r) {
                      r.clogs.size() - clogs_complete, r.avalanches.size());
   out << fmt::format("time          {:.2f} s simulated in {:.2f} s wall = {:.2f} simulated s per wall s (dt = {:g} s)\n",
                      r.sim_time_s, r.wall_time_s, r.sim_per_wall(), r.time_step_s);
+  if (auto why = invalid_run_reason(r)) out << "INVALID       " << *why << "\n";
 }
 
 }  // namespace gapflow

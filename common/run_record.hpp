@@ -99,6 +99,10 @@ struct RunRecord {
 
 void write_json(std::ostream& out, const RunRecord& r);
 // One-screen summary for people.
+// Why a finished run is not a valid discharge, or nothing: particles that left the
+// board elsewhere than through the gap (tunnelling, or walls shaken hard enough to
+// fling them out) make every J and the regime meaningless.
+std::optional<std::string> invalid_run_reason(const RunRecord& r);
 void write_summary(std::ostream& out, const RunRecord& r);
 
 }  // namespace gapflow

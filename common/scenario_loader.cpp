@@ -7,6 +7,7 @@
 // the reader actually understands.
 #include "common/scenario_loader.hpp"
 
+#include "common/input_bounds.hpp"
 #include "common/random.hpp"
 #include "common/text_file.hpp"
 #include "common/toml_parse.hpp"
@@ -52,8 +53,6 @@ ScenarioInvalid::ScenarioInvalid(std::string key_, std::string value_, std::stri
       allowed(std::move(allowed_)) {}
 
 namespace {
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // ---------------------------------------------------------------- value text
 
@@ -103,41 +102,6 @@ std::string value_text(const toml::node& n) {
   std::ostringstream os;  // dates and times
   n.visit([&](auto&& v) { os << v; });
   return os.str();
-}
-
-// ---------------------------------------------------------------- ranges
-
-struct Range {
-  double lo = -kInf, hi = kInf;
-  bool lo_open = false, hi_open = false;
-  const char* unit = "";
-  bool contains(double v) const {
-    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
-  }
-  // "> 0 (mm)", "in [0, 60) (deg)", "" for any finite value.
-  std::string text() const {
-    std::string b;
-    if (lo > -kInf && hi < kInf)
-      b = fmt::format("in {}{}, {}{}", lo_open ? '(' : '[', lo, hi, hi_open ? ')' : ']');
-    else if (lo > -kInf)
-      b = fmt::format("{} {}", lo_open ? ">" : ">=", lo);
-    else if (hi < kInf)
-      b = fmt::format("{} {}", hi_open ? "<" : "<=", hi);
-    if (*unit) b += fmt::format("{}({})", b.empty() ? "" : " ", unit);
-    return b;
-  }
-};
-
-Range above(double lo, const char* unit = "") { return {lo, kInf, true, false, unit}; }
-Range at_least(double lo, const char* unit = "") { return {lo, kInf, false, false, unit}; }
-Range closed(double lo, double hi, const char* unit = "") { return {lo, hi, false, false, unit}; }
-Range upper_open(double lo, double hi, const char* unit = "") { return {lo, hi, false, true, unit}; }
-Range lower_open(double lo, double hi, const char* unit = "") { return {lo, hi, true, false, unit}; }
-Range any(const char* unit = "") { return {-kInf, kInf, false, false, unit}; }
-
-std::string int_range_text(std::int64_t lo, std::int64_t hi) {
-  if (hi == std::numeric_limits<std::int64_t>::max()) return fmt::format("an integer >= {}", lo);
-  return fmt::format("an integer in [{}, {}]", lo, hi);
 }
 
 // ---------------------------------------------------------------- reader
@@ -217,7 +181,7 @@ class Section {
     std::string bounds = range.text();
     std::string sep = bounds.empty() ? "" : " ";
     if (!n->is_number()) fail(key, *n, "must be a number" + sep + bounds);
-    double v = n->value<double>().value();
+    const double v = *number_value(*n);
     if (!std::isfinite(v)) fail(key, *n, "must be a finite number" + sep + bounds);
     if (!range.contains(v)) fail(key, *n, "must be " + bounds);
     return v;
@@ -301,17 +265,17 @@ void read_scenario_section(Section s, ScenarioDef& d) {
 
 void read_plane(Section s, PlaneDef& p) {
   s.number("incline_deg", p.incline_deg, upper_open(0, 60, "deg"));
-  s.number("length_mm", p.length_mm, above(0, "mm"));
-  s.number("width_mm", p.width_mm, above(0, "mm"));
+  s.number("length_mm", p.length_mm, lower_open(0, kMaxLengthMm, "mm"));
+  s.number("width_mm", p.width_mm, lower_open(0, kMaxLengthMm, "mm"));
   s.number("lateral_tilt_deg", p.lateral_tilt_deg, closed(-10, 10, "deg"));
   s.finish();
 }
 
 void read_bottleneck(Section s, BottleneckDef& b) {
-  s.number("wall_angle_deg", b.wall_angle_deg, lower_open(0, 90, "deg"));
-  s.number("gap_mm", b.gap_mm, above(0, "mm"));
-  s.number("wall_thickness_mm", b.wall_thickness_mm, above(0, "mm"));
-  s.number("gap_offset_mm", b.gap_offset_mm, any("mm"));
+  s.number("wall_angle_deg", b.wall_angle_deg, closed(1, 90, "deg"));
+  s.number("gap_mm", b.gap_mm, lower_open(0, kMaxLengthMm, "mm"));
+  s.number("wall_thickness_mm", b.wall_thickness_mm, lower_open(0, kMaxLengthMm, "mm"));
+  s.number("gap_offset_mm", b.gap_offset_mm, closed(-kMaxLengthMm, kMaxLengthMm, "mm"));
   s.finish();
   // W + delta < plane.width_mm is checked by compile_scenario (it needs the plane).
   if (b.gap_mm + b.gap_offset_mm <= 0)
@@ -324,7 +288,8 @@ void read_bottleneck(Section s, BottleneckDef& b) {
 void read_diameter(Section& s, double& out) {
   const toml::node* n = s.get("diameter_mm");
   if (!n) return;
-  const std::string allowed = "must be a number > 0 (mm) or one of: small, medium, large";
+  const Range range = closed(kMinDiameterMm, kMaxDiameterMm, "mm");
+  const std::string allowed = "must be a number " + range.text() + " or one of: small, medium, large";
   if (auto str = n->as_string()) {
     const std::string& v = str->get();
     if (v == "small") out = 6.15;
@@ -334,8 +299,8 @@ void read_diameter(Section& s, double& out) {
     return;
   }
   if (!n->is_number()) s.fail("diameter_mm", *n, allowed);
-  double v = n->value<double>().value();
-  if (!std::isfinite(v) || v <= 0) s.fail("diameter_mm", *n, allowed);
+  const double v = *number_value(*n);
+  if (!std::isfinite(v) || !range.contains(v)) s.fail("diameter_mm", *n, allowed);
   out = v;
 }
 
@@ -347,20 +312,20 @@ void read_particles(Section s, ParticlesDef& p) {
                                                                 {"uniform", SizeDistribution::uniform},
                                                                 {"normal", SizeDistribution::normal}}))
     p.size_distribution = *v;
-  s.number("density_kg_m3", p.density_kg_m3, above(0, "kg/m^3"));
+  s.number("density_kg_m3", p.density_kg_m3, lower_open(0, 100000, "kg/m^3"));
   s.number("friction_particle", p.friction_particle, closed(0, 2));
   s.number("friction_wall", p.friction_wall, closed(0, 2));
   s.number("friction_base", p.friction_base, closed(0, 2));
   s.number("restitution", p.restitution, closed(0, 1));
   s.number("rolling_resistance", p.rolling_resistance, upper_open(0, 1));
-  s.number("spinning_friction_mm", p.spinning_friction_mm, at_least(0, "mm"));
+  s.number("spinning_friction_mm", p.spinning_friction_mm, closed(0, kMaxDiameterMm, "mm"));
   s.number("drag_per_s", p.drag_per_s, closed(0, 100, "1/s"));
   s.number("quadratic_drag_per_m", p.quadratic_drag_per_m, closed(0, 100, "1/m"));
   s.finish();
 }
 
 void read_release(Section s, ReleaseDef& r) {
-  s.number("barrier_mm", r.barrier_mm, at_least(0, "mm"));
+  s.number("barrier_mm", r.barrier_mm, closed(0, kMaxLengthMm, "mm"));
   s.number("settle_s", r.settle_s, closed(0, 60, "s"));
   s.number("lattice_gap", r.lattice_gap, closed(0, 1));
   s.finish();
@@ -390,23 +355,32 @@ bool strictly_convex_ccw(const std::vector<Vec2>& p, double eps) {
   return true;
 }
 
-std::vector<Vec2> read_vertices(Section& s) {
-  const std::string allowed = "must be an array of at least 3 [x, y] number pairs (mm) forming a "
-                              "strictly convex polygon with non-zero area";
+// The smallest obstruction feature (edge, width, diameter) the engines can build:
+// Box2D welds polygon vertices closer than half its linear slop and asserts on a
+// degenerate hull, so a shape far smaller than a particle is refused here with the reason.
+double min_feature_mm(double particle_d_mm) { return particle_d_mm / (1 / kMinFeatureD); }  // d / 10, printed short
+
+std::vector<Vec2> read_vertices(Section& s, double particle_d_mm) {
+  constexpr int kMaxVertices = 8;  // b2_maxPolygonVertices (Box2D 2.4)
+  const double min_mm = min_feature_mm(particle_d_mm);
+  const std::string allowed = fmt::format(
+      "must be an array of 3 to {} [x, y] number pairs (mm, each |coordinate| <= {}) forming a strictly convex "
+      "polygon whose edges and widths are all >= {} d = {} mm",
+      kMaxVertices, kMaxLengthMm, kMinFeatureD, min_mm);
   const toml::node* n = s.get("vertices_mm");
   if (!n) s.missing("vertices_mm", "required for shape = \"polygon\": " + allowed.substr(8));
   const toml::array* a = n->as_array();
   if (!a) s.fail("vertices_mm", *n, allowed);
+  if (a->size() < 3 || a->size() > kMaxVertices) s.fail("vertices_mm", *n, allowed);
   std::vector<Vec2> pts;
   for (const toml::node& e : *a) {
     const toml::array* xy = e.as_array();
     if (!xy || xy->size() != 2 || !(*xy)[0].is_number() || !(*xy)[1].is_number())
       s.fail("vertices_mm", *n, allowed);
-    Vec2 v{(*xy)[0].value<double>().value(), (*xy)[1].value<double>().value()};
-    if (!std::isfinite(v.x) || !std::isfinite(v.y)) s.fail("vertices_mm", *n, allowed);
+    Vec2 v{*number_value((*xy)[0]), *number_value((*xy)[1])};
+    if (!(std::abs(v.x) <= kMaxLengthMm) || !(std::abs(v.y) <= kMaxLengthMm)) s.fail("vertices_mm", *n, allowed);
     pts.push_back(v);
   }
-  if (pts.size() < 3) s.fail("vertices_mm", *n, allowed);
   double scale = 0;
   for (const Vec2& v : pts) scale = std::max({scale, std::abs(v.x), std::abs(v.y)});
   const double eps = 1e-12 * scale * scale;
@@ -414,6 +388,18 @@ std::vector<Vec2> read_vertices(Section& s) {
   if (std::abs(area) <= eps) s.fail("vertices_mm", *n, allowed);
   if (area < 0) std::reverse(pts.begin(), pts.end());  // accept clockwise input
   if (!strictly_convex_ccw(pts, eps)) s.fail("vertices_mm", *n, allowed);
+  // Every edge long enough, and every other vertex far enough from each edge's line.
+  const std::size_t m = pts.size();
+  for (std::size_t i = 0; i < m; ++i) {
+    const Vec2 p = pts[i], q = pts[(i + 1) % m];
+    const double edge = std::hypot(q.x - p.x, q.y - p.y);
+    if (edge < min_mm)
+      s.fail("vertices_mm", *n, fmt::format("{} (edge {} is {:.4g} mm)", allowed, i + 1, edge));
+    for (std::size_t j = 0; j < m; ++j)
+      if (j != i && j != (i + 1) % m && cross(p, q, pts[j]) / edge < min_mm)
+        s.fail("vertices_mm", *n, fmt::format("{} (too thin: vertex {} is {:.4g} mm from edge {})", allowed, j + 1,
+                                              cross(p, q, pts[j]) / edge, i + 1));
+  }
   return pts;
 }
 
@@ -430,8 +416,8 @@ void apply_shape(ShapeChoice c, ObstructionDef& o) {
   }
 }
 
-void read_triangle(Section& s, ObstructionDef& o) {
-  s.number("side_mm", o.side_mm, above(0, "mm"));
+void read_triangle(Section& s, ObstructionDef& o, double particle_d_mm) {
+  s.number("side_mm", o.side_mm, closed(min_feature_mm(particle_d_mm), kMaxLengthMm, "mm; at least 0.1 d"));
   const toml::node* n = s.get("apex");
   if (!n) return;
   const char* names = "one of: away_from_gap, toward_gap";
@@ -444,7 +430,7 @@ void read_triangle(Section& s, ObstructionDef& o) {
   o.apex = apex;
 }
 
-void read_obstruction(Section s, ObstructionDef& o) {
+void read_obstruction(Section s, ObstructionDef& o, double particle_d_mm) {
   auto shape = s.choice<ShapeChoice>("shape", {{"none", ShapeChoice::none},
                                                {"cylinder", ShapeChoice::cylinder},
                                                {"triangle", ShapeChoice::triangle},
@@ -453,20 +439,21 @@ void read_obstruction(Section s, ObstructionDef& o) {
                                                {"V", ShapeChoice::V}});
   if (shape) apply_shape(*shape, o);
   // Keys of other shapes are ignored so that `--set obstruction.shape=...` works on any file.
-  if (o.shape == ObstructionShape::cylinder) s.number("diameter_mm", o.diameter_mm, above(0, "mm"));
+  const Range size = closed(min_feature_mm(particle_d_mm), kMaxLengthMm, "mm; at least 0.1 d");
+  if (o.shape == ObstructionShape::cylinder) s.number("diameter_mm", o.diameter_mm, size);
   else s.ignore("diameter_mm");
-  if (o.shape == ObstructionShape::triangle) read_triangle(s, o);
+  if (o.shape == ObstructionShape::triangle) read_triangle(s, o, particle_d_mm);
   else { s.ignore("side_mm"); s.ignore("apex"); }
-  if (o.shape == ObstructionShape::polygon) o.vertices_mm = read_vertices(s);
+  if (o.shape == ObstructionShape::polygon) o.vertices_mm = read_vertices(s, particle_d_mm);
   else s.ignore("vertices_mm");
-  s.number("distance_mm", o.distance_mm, at_least(0, "mm"));
+  s.number("distance_mm", o.distance_mm, closed(0, kMaxLengthMm, "mm"));
   if (auto r = s.choice<DistanceReference>("reference", {{"nearest", DistanceReference::nearest},
                                                          {"centre", DistanceReference::centre},
                                                          {"center", DistanceReference::centre}}))
     o.reference = *r;
-  s.number("lateral_offset_mm", o.lateral_offset_mm, any("mm"));
+  s.number("lateral_offset_mm", o.lateral_offset_mm, closed(-kMaxLengthMm, kMaxLengthMm, "mm"));
   // Below the shape's inradius: checked by compile_scenario, which builds the outline.
-  s.number("corner_radius_mm", o.corner_radius_mm, at_least(0, "mm"));
+  s.number("corner_radius_mm", o.corner_radius_mm, closed(0, kMaxLengthMm, "mm"));
   s.finish();
   if (o.corner_radius_mm > 0 && o.shape != ObstructionShape::triangle && o.shape != ObstructionShape::polygon)
     s.fail_value("corner_radius_mm", toml_double(o.corner_radius_mm),
@@ -476,13 +463,13 @@ void read_obstruction(Section s, ObstructionDef& o) {
 
 void read_shake(Section s, ShakeDef& k) {
   s.boolean("enabled", k.enabled);
-  s.number("amplitude_mm", k.amplitude_mm, at_least(0, "mm"));
-  s.number("direction_deg", k.direction_deg, any("deg"));
+  s.number("amplitude_mm", k.amplitude_mm, closed(0, kMaxAmplitudeMm, "mm"));
+  s.number("direction_deg", k.direction_deg, closed(-360, 360, "deg"));
   s.boolean("mirror", k.mirror);
-  s.number("decay_s", k.decay_s, above(0, "s"));
-  s.number("period_s", k.period_s, above(0, "s"));
-  s.number("start_s", k.start_s, at_least(0, "s"));
-  s.number("frequency_hz", k.frequency_hz, above(0, "Hz"));
+  s.number("decay_s", k.decay_s, lower_open(0, kMaxTimeS, "s"));
+  s.number("period_s", k.period_s, lower_open(0, kMaxTimeS, "s"));
+  s.number("start_s", k.start_s, closed(0, kMaxTimeS, "s"));
+  s.number("frequency_hz", k.frequency_hz, lower_open(0, kMaxFrequencyHz, "Hz"));
   s.finish();
   if (k.decay_s > k.period_s)
     s.fail_value("decay_s", toml_double(k.decay_s),
@@ -502,14 +489,14 @@ void read_run(Section s, RunDef& r, int particle_count) {
                                               {"time_limit", EndCondition::time_limit},
                                               {"n_passed", EndCondition::n_passed}}))
     r.end = *e;
-  s.number("time_limit_s", r.time_limit_s, above(0, "s"));
+  s.number("time_limit_s", r.time_limit_s, lower_open(0, kMaxTimeS, "s"));
   // 0 is the "unused" default, so that canonical_toml of any end condition reads back.
   s.integer("n_passed", r.n_passed, 0);
-  s.number("clog_timeout_s", r.clog_timeout_s, above(0, "s"));
-  s.number("stop_after_no_flow_s", r.stop_after_no_flow_s, at_least(0, "s"));
-  s.integer("stranded_max", r.stranded_max, 0);
+  s.number("clog_timeout_s", r.clog_timeout_s, lower_open(0, kMaxTimeS, "s"));
+  s.number("stop_after_no_flow_s", r.stop_after_no_flow_s, closed(0, kMaxTimeS, "s"));
+  s.integer("stranded_max", r.stranded_max, 0, 1000000);
   if (auto seed = s.integer_value("seed", 0)) r.seed = static_cast<std::uint64_t>(*seed);
-  s.integer("replicate", r.replicate, 0);
+  s.integer("replicate", r.replicate, 0, 1000000000);
   s.finish();
 
   if (r.end == EndCondition::n_passed) {
@@ -535,7 +522,7 @@ void read_protocol(Section s, ProtocolDef& p) {
 }
 
 void read_box2d(Section s, Box2DDef& b) {
-  s.number("time_step_s", b.time_step_s, lower_open(0, 0.1, "s"));
+  s.number("time_step_s", b.time_step_s, closed(kMinTimeStepS, kMaxTimeStepS, "s"));
   s.integer("velocity_iterations", b.velocity_iterations, 1, 1000);
   s.integer("position_iterations", b.position_iterations, 0, 1000);
   s.boolean("sleeping", b.sleeping);
@@ -557,7 +544,7 @@ void read_box2d(Section s, Box2DDef& b) {
 }
 
 void read_bullet(Section s, BulletDef& b) {
-  s.number("time_step_s", b.time_step_s, lower_open(0, 0.1, "s"));
+  s.number("time_step_s", b.time_step_s, closed(kMinTimeStepS, kMaxTimeStepS, "s"));
   s.integer("substeps", b.substeps, 1, 100);
   s.integer("solver_iterations", b.solver_iterations, 1, 1000);
   s.boolean("sleeping", b.sleeping);
@@ -591,7 +578,7 @@ ScenarioDef read_document(Reader& r, const toml::table& doc) {
   read_bottleneck(bottleneck, d.bottleneck);
   read_particles(particles, d.particles);
   read_release(release, d.release);
-  read_obstruction(obstruction, d.obstruction);
+  read_obstruction(obstruction, d.obstruction, d.particles.diameter_mm);
   read_shaking(shaking, d.shaking);
   read_protocol(protocol, d.protocol);
   read_run(run, d.run, d.particles.count);
@@ -825,9 +812,13 @@ LoadedScenario parse_scenario(std::string_view text, std::string_view source_nam
 }
 
 LoadedScenario load_scenario(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
-  const std::optional<std::string> text = read_text_file(file);
-  if (!text) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the scenario file");
-  return parse_with(*text, file.string(), overrides);
+  std::string text;
+  try {
+    text = read_input_file(file, "scenario file");
+  } catch (const FileError& e) {
+    throw ScenarioError({file.string(), 0, 0}, "", "", e.reason());
+  }
+  return parse_with(text, file.string(), overrides);
 }
 
 ScenarioError locate(const ScenarioInvalid& e, const LoadedScenario& s) {

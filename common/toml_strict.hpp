@@ -6,6 +6,7 @@
 // value as TOML spells it, and what is allowed.
 #pragma once
 
+#include "common/input_bounds.hpp"
 #include "common/scenario_loader.hpp"
 
 #include <fmt/format.h>
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -86,10 +88,12 @@ class StrictTable {
       fail(key, *n, non_empty ? "must be a non-empty string" : "must be a string");
     return n->as_string()->get();
   }
-  std::optional<std::int64_t> integer(std::string_view key, std::int64_t lo) {
+  std::optional<std::int64_t> integer(std::string_view key, std::int64_t lo,
+                                      std::int64_t hi = std::numeric_limits<std::int64_t>::max()) {
     const toml::node* n = get(key);
     if (!n) return std::nullopt;
-    if (!n->is_integer() || n->as_integer()->get() < lo) fail(key, *n, fmt::format("must be an integer >= {}", lo));
+    if (!n->is_integer() || n->as_integer()->get() < lo || n->as_integer()->get() > hi)
+      fail(key, *n, "must be " + int_range_text(lo, hi));
     return n->as_integer()->get();
   }
   // A finite number in [lo, hi] (integers read as numbers).

@@ -1,13 +1,13 @@
 #include "studies/jobs.hpp"
 
 #include "common/geometry.hpp"
+#include "common/input_bounds.hpp"
 #include "common/random.hpp"
+#include "common/text_file.hpp"
 
 #include <fmt/format.h>
 
-#include <fstream>
 #include <map>
-#include <sstream>
 
 namespace gapflow {
 
@@ -84,13 +84,12 @@ PointSpec point_spec(const StudyDef& study, const SeriesDef& s, const Point& p) 
 }
 
 std::string read_scenario_text(const SeriesDef& s) {
-  std::ifstream in(s.scenario, std::ios::binary);
-  if (!in)
+  try {
+    return read_input_file(s.scenario, "scenario file");  // bounded: a series may name /dev/zero
+  } catch (const FileError& e) {
     throw ScenarioError(s.scenario_where, "series.scenario", "\"" + s.scenario.string() + "\"",
-                        fmt::format("cannot open the scenario file (relative to the study file) [series '{}']", s.label));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+                        fmt::format("{} (relative to the study file) [series '{}']", e.reason(), s.label));
+  }
 }
 
 // Re-throw a scenario error at the study-file location of the override that
@@ -169,7 +168,29 @@ void check_unique(std::map<std::string, std::size_t>& first_of_key, const std::v
 
 }  // namespace
 
+double count_jobs(const StudyDef& study) {
+  double total = 0;  // a double cannot overflow here: every factor is bounded by the loader
+  for (const SeriesDef& s : study.series)
+    for (ModelKind model : study.models) {
+      double points = 1;
+      for (const SweepAxis& a : s.axes) {
+        const std::size_t n = a.values.size(), thin = static_cast<std::size_t>(std::max(1, thin_for(study, model)));
+        points *= static_cast<double>((n + thin - 1) / thin + ((n - 1) % thin != 0 ? 1 : 0));
+      }
+      total += points * replicates_for(study, model);
+    }
+  if (study.confirm.enabled) total += static_cast<double>(study.confirm.top) * study.confirm.replicates;
+  return total;
+}
+
 std::vector<Job> expand_jobs(const StudyDef& study) {
+  // Checked before anything is allocated: a billion replicates must fail at once, not after minutes.
+  if (const double n = count_jobs(study); n > static_cast<double>(kMaxStudyJobs))
+    throw ScenarioError({study.file.string(), 0, 0}, "", "",
+                        fmt::format("the study expands to {:.6g} jobs (series x points x models x replicates, "
+                                    "plus [confirm] top x replicates); at most {} are allowed: split it or thin "
+                                    "its axes",
+                                    n, kMaxStudyJobs));
   std::vector<Job> jobs;
   std::map<std::string, std::size_t> first_of_key;
   for (const SeriesDef& s : study.series) {

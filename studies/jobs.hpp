@@ -53,6 +53,10 @@ std::string job_key(std::uint64_t scenario_hash, ModelKind kind);
 // overrides (else in the scenario file), naming the series and the point.
 std::vector<Job> expand_jobs(const StudyDef& study);
 
+// How many jobs expand_jobs would make (with the [confirm] stage's), computed without
+// making them; expand_jobs refuses more than kMaxStudyJobs (common/input_bounds.hpp).
+double count_jobs(const StudyDef& study);
+
 // Load and compile a job's scenario (the runner calls this again in its worker).
 CompiledScenario compile_job(const Job& job);
 

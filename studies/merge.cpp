@@ -51,7 +51,7 @@ MergeSummary merge_stores(Store& out, const std::vector<std::filesystem::path>& 
   for (const StudyFileRecord& f : out.study_files()) has_study_file[f.study] = true;
 
   for (const auto& source : sources) {
-    const Store in(source);
+    const Store in(source, StoreAccess::read);
     const std::map<std::string, Provenance> known = in.provenance();
     std::vector<StoredRun> batch;
     std::vector<Provenance> batch_provenance;

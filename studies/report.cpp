@@ -60,9 +60,10 @@ std::string read_text(const toml::table& t, const std::string& source, const cha
 
 double read_number(const toml::table& t, const std::string& source, const char* key) {
   const toml::node* n = t.get(key);
-  if (!n->is_number())
-    throw ScenarioError(where_of(source, *n), std::string("report.") + key, node_text(*n), "must be a number");
-  return n->value<double>().value();
+  const std::optional<double> v = number_value(*n);
+  if (!v || !std::isfinite(*v))
+    throw ScenarioError(where_of(source, *n), std::string("report.") + key, node_text(*n), "must be a finite number");
+  return *v;
 }
 
 template <class E>
@@ -141,9 +142,7 @@ StudyInfo parse_study_info(std::string_view text, std::string_view source_name) 
 }
 
 StudyInfo read_study_info(const std::filesystem::path& file) {
-  const std::optional<std::string> text = read_text_file(file);
-  if (!text) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the study file");
-  StudyInfo info = parse_study_info(*text, file.string());
+  StudyInfo info = parse_study_info(read_input_file(file, "study file"), file.string());
   info.file = file;
   return info;
 }

@@ -134,14 +134,12 @@ std::string regenerate_command(const ReportRequest& r) {
 namespace {
 
 fs::path store_file(const fs::path& results) {
-  const fs::path db = fs::is_directory(results) ? results / "runs.sqlite" : results;
-  // Checked first: opening a missing store would create an empty one.
-  if (!fs::exists(db)) throw std::invalid_argument("no results store at " + db.string());
-  return db;
+  // Opened read-only later (StoreAccess::read): a missing or empty file is refused there, never created.
+  return fs::is_directory(results) ? results / "runs.sqlite" : results;
 }
 
 std::vector<StoredRun> load_runs(const fs::path& db, const StudyInfo& info) {
-  const Store store(db);
+  const Store store(db, StoreAccess::read);
   std::vector<StoredRun> runs = store.load();
   std::set<std::string> studies;
   for (const StoredRun& r : runs) studies.insert(r.id.study);
@@ -162,7 +160,7 @@ std::vector<StoredRun> load_runs(const fs::path& db, const StudyInfo& info) {
 // Without --study: the study file recorded in the store when the study ran (its
 // [report] settings), else a bare report (tables, no analyses) with a warning.
 StudyInfo recorded_study_info(const fs::path& db, std::ostream& log) {
-  const std::vector<StudyFileRecord> files = Store(db).study_files();
+  const std::vector<StudyFileRecord> files = Store(db, StoreAccess::read).study_files();
   if (files.size() == 1) {
     const StudyFileRecord& f = files.front();
     log << fmt::format("using the study file recorded in the store: {} (recorded {})\n", f.source, f.recorded_at);

@@ -4,7 +4,15 @@
 #include <fmt/ranges.h>
 #include <sqlite3.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <ostream>
 #include <stdexcept>
 #include <unistd.h>
@@ -71,17 +79,20 @@ CREATE TABLE IF NOT EXISTS study_files (
 );
 )sql";
 
+// A damaged or foreign file is bad input (exit 2) and names the file; anything else
+// (a full disk, a lock held for longer than the busy timeout) is a failure while running.
 [[noreturn]] void fail(sqlite3* db, const std::string& what) {
-  throw std::runtime_error(fmt::format("results store: {}: {}", what, db ? sqlite3_errmsg(db) : "out of memory"));
+  if (!db) throw std::runtime_error("results store: out of memory");
+  const int code = sqlite3_errcode(db) & 0xff;
+  const char* file = sqlite3_db_filename(db, "main");
+  if (code == SQLITE_CORRUPT || code == SQLITE_NOTADB)
+    throw StoreError(fmt::format("results store {} is damaged or not a results store: {}", file ? file : "?",
+                                 sqlite3_errmsg(db)));
+  throw std::runtime_error(fmt::format("results store {}: {}: {}", file ? file : "?", what, sqlite3_errmsg(db)));
 }
 
 void exec(sqlite3* db, const char* sql) {
-  char* err = nullptr;
-  if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
-    std::string msg = err ? err : "?";
-    sqlite3_free(err);
-    throw std::runtime_error(fmt::format("results store: {}: {}", sql, msg));
-  }
+  if (sqlite3_exec(db, sql, nullptr, nullptr, nullptr) != SQLITE_OK) fail(db, sql);
 }
 
 // A prepared statement; bind() takes 1-based positions like SQLite.
@@ -302,27 +313,179 @@ std::string csv_field(const Statement& s, int c) {
 
 }  // namespace
 
-Store::Store(const std::filesystem::path& file) {
-  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
-  if (sqlite3_open(file.c_str(), &db_) != SQLITE_OK) {
-    std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
-    sqlite3_close(db_);
-    throw std::runtime_error(fmt::format("results store: cannot open {}: {}", file.string(), msg));
+// "<store>.lock", flock'ed while a study writes: advisory, released by the kernel when
+// the process dies (kill -9 included), so it never needs cleaning up by hand.
+class Store::WriterLock {
+ public:
+  explicit WriterLock(const std::filesystem::path& store) : path_(store.string() + ".lock") {
+    for (;;) {  // retry if another process removed the file between our open and our flock
+      fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+      if (fd_ < 0)
+        throw std::runtime_error(fmt::format("results store: cannot create the lock file {}: {}", path_.string(),
+                                             std::strerror(errno)));
+      if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+        const int e = errno;
+        std::string holder = holder_pid();
+        ::close(fd_);
+        if (e == EWOULDBLOCK)
+          throw StoreError(fmt::format("results store {} is being written by another gapflow study{} (lock {}): "
+                                       "wait for it to finish, or give this one another --db",
+                                       store.string(), holder, path_.string()));
+        throw std::runtime_error(fmt::format("results store: cannot lock {}: {}", path_.string(), std::strerror(e)));
+      }
+      struct stat held {}, named {};
+      if (::fstat(fd_, &held) == 0 && ::stat(path_.c_str(), &named) == 0 && held.st_ino == named.st_ino &&
+          held.st_dev == named.st_dev)
+        break;
+      ::close(fd_);
+    }
+    const std::string pid = std::to_string(::getpid()) + "\n";
+    if (::ftruncate(fd_, 0) == 0 && ::write(fd_, pid.data(), pid.size()) < 0) {
+      // The pid is only for the other process's message; the lock holds without it.
+    }
   }
-  // Another process (a resumed study, an export, a test polling) may hold the lock briefly.
+  ~WriterLock() {
+    ::unlink(path_.c_str());  // while still locked: a waiting opener sees a new inode and retries
+    ::close(fd_);
+  }
+
+ private:
+  std::string holder_pid() const {
+    char buf[32] = {};
+    const ssize_t n = ::pread(fd_, buf, sizeof buf - 1, 0);
+    if (n <= 0) return "";
+    std::string pid(buf, static_cast<std::size_t>(n));
+    pid.erase(pid.find_last_not_of(" \n") + 1);
+    return pid.empty() ? "" : " (process " + pid + ")";
+  }
+  std::filesystem::path path_;
+  int fd_ = -1;
+};
+
+namespace {
+
+// What is at `file`, checked before SQLite sees it: SQLite would silently turn an empty
+// file into an empty store, and call a text file "file is not a database" without naming it.
+// True if the file exists (and looks like a SQLite database).
+bool check_store_file(const std::filesystem::path& file) {
+  struct stat st {};
+  if (::stat(file.c_str(), &st) != 0) {
+    if (errno == ENOENT) return false;
+    throw StoreError(fmt::format("results store {}: {}", file.string(), std::strerror(errno)));
+  }
+  if (S_ISDIR(st.st_mode)) throw StoreError(fmt::format("results store {} is a directory, not a SQLite file", file.string()));
+  if (!S_ISREG(st.st_mode)) throw StoreError(fmt::format("results store {} is not a regular file", file.string()));
+  if (st.st_size == 0)
+    throw StoreError(fmt::format("results store {} is empty (0 bytes), not a results store: remove it or give "
+                                 "another path",
+                                 file.string()));
+  static constexpr char kMagic[16] = {'S', 'Q', 'L', 'i', 't', 'e', ' ', 'f', 'o', 'r', 'm', 'a', 't', ' ', '3', '\0'};
+  char head[16] = {};
+  std::FILE* f = std::fopen(file.c_str(), "rb");
+  if (!f) throw StoreError(fmt::format("results store {}: {}", file.string(), std::strerror(errno)));
+  const std::size_t n = std::fread(head, 1, sizeof head, f);
+  std::fclose(f);
+  if (n != sizeof head || std::memcmp(head, kMagic, sizeof head) != 0)
+    throw StoreError(fmt::format("results store {} is not a SQLite database (its first bytes are not "
+                                 "'SQLite format 3'): not a results store, or damaged",
+                                 file.string()));
+  return true;
+}
+
+sqlite3* open_sqlite(const std::string& name, int flags) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(name.c_str(), &db, flags, nullptr) != SQLITE_OK) {
+    std::string msg = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    throw StoreError(fmt::format("results store: cannot open {}: {}", name, msg));
+  }
+  return db;
+}
+
+int schema_version(sqlite3* db) {
+  Statement v(db, "PRAGMA user_version");
+  v.step();
+  return v.integer(0);
+}
+
+// Read-only: a WAL store on a read-only folder without its -shm file cannot be opened
+// normally; a store that was closed cleanly has no -wal to replay, so it is immutable.
+sqlite3* open_read_only(const std::filesystem::path& file) {
+  sqlite3* db = open_sqlite(file.string(), SQLITE_OPEN_READONLY);
+  if (sqlite3_exec(db, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr) == SQLITE_OK) return db;
+  const int code = sqlite3_errcode(db) & 0xff;
+  if (code != SQLITE_CANTOPEN && code != SQLITE_READONLY) {
+    const std::string why = fmt::format("results store {} is damaged or not a results store: {}", file.string(),
+                                        sqlite3_errmsg(db));
+    sqlite3_close(db);
+    throw StoreError(why);
+  }
+  sqlite3_close(db);
+  std::error_code ec;
+  if (std::filesystem::exists(file.string() + "-wal", ec))
+    throw StoreError(fmt::format("results store {} is read-only and has unfinished writes ({}-wal): open it once "
+                                 "where it is writable",
+                                 file.string(), file.string()));
+  const std::string uri = "file:" + std::filesystem::absolute(file).string() + "?immutable=1";
+  db = open_sqlite(uri, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
+  if (sqlite3_exec(db, "SELECT count(*) FROM sqlite_master", nullptr, nullptr, nullptr) != SQLITE_OK) {
+    const std::string why = fmt::format("results store {} is damaged or not a results store: {}", file.string(),
+                                        sqlite3_errmsg(db));
+    sqlite3_close(db);
+    throw StoreError(why);
+  }
+  return db;
+}
+
+}  // namespace
+
+Store::Store(const std::filesystem::path& file, StoreAccess access) {
+  try {
+    open(file, access);
+  } catch (...) {
+    sqlite3_close(db_);  // the destructor does not run when a constructor throws
+    db_ = nullptr;
+    throw;
+  }
+}
+
+void Store::open(const std::filesystem::path& file, StoreAccess access) {
+  const bool exists = check_store_file(file);
+  if (access == StoreAccess::read) {
+    if (!exists) throw StoreError(fmt::format("no results store at {}: no such file", file.string()));
+    db_ = open_read_only(file);
+    exec(db_, "PRAGMA query_only = ON");
+    const int version = schema_version(db_);
+    if (version != kSchemaVersion || !has_table(db_, "runs"))
+      throw StoreError(fmt::format("{} is a SQLite database but not a results store (schema version {}, "
+                                   "this build reads {})",
+                                   file.string(), version, kSchemaVersion));
+    return;
+  }
+  if (file.has_parent_path()) {
+    std::error_code ec;
+    std::filesystem::create_directories(file.parent_path(), ec);
+    if (ec) throw StoreError(fmt::format("results store {}: cannot create its folder: {}", file.string(), ec.message()));
+  }
+  if (access == StoreAccess::exclusive) lock_ = std::make_unique<WriterLock>(file);
+  db_ = open_sqlite(file.string(), SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  // Another process (an export, a report, a test polling) may hold the lock briefly.
   sqlite3_busy_timeout(db_, 10000);
   exec(db_, "PRAGMA journal_mode = WAL");
   exec(db_, "PRAGMA synchronous = NORMAL");  // WAL + NORMAL: a committed run survives a killed process
   exec(db_, "PRAGMA foreign_keys = ON");
-  int version = 0;
-  {
-    Statement v(db_, "PRAGMA user_version");
-    v.step();
-    version = v.integer(0);
-  }
+  const int version = schema_version(db_);
   if (version != 0 && version != kSchemaVersion)
-    throw std::runtime_error(fmt::format("results store {}: schema version {}, this build reads {}", file.string(),
-                                         version, kSchemaVersion));
+    throw StoreError(fmt::format("results store {}: schema version {}, this build reads {}", file.string(), version,
+                                 kSchemaVersion));
+  if (version == 0 && exists) {  // an existing SQLite file that is not ours
+    Statement any(db_, "SELECT count(*) FROM sqlite_master");
+    any.step();
+    if (any.int64(0) > 0)
+      throw StoreError(fmt::format("{} is a SQLite database but not a results store: gapflow will not add its "
+                                   "tables to it",
+                                   file.string()));
+  }
   if (version == 0) {  // new file: created once, so that readers of an existing store never need the write lock
     Transaction tx(db_);
     exec(db_, kSchema);
@@ -331,7 +494,10 @@ Store::Store(const std::filesystem::path& file) {
   }
 }
 
-Store::~Store() { sqlite3_close(db_); }
+Store::~Store() {
+  sqlite3_close(db_);
+  lock_.reset();  // after the connection: the next writer must find the store closed
+}
 
 const std::vector<std::string>& Store::tables() {
   static const std::vector<std::string> names{"runs",        "crossings",  "avalanches", "clogs",

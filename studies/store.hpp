@@ -21,9 +21,11 @@
 #include <filesystem>
 #include <iosfwd>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -65,10 +67,25 @@ struct PlannedJob {
 // What this build writes into runs.code_version (git describe at configure time).
 const char* code_version();
 
+// A store that cannot be used as asked (bad input: exit 2): not a SQLite file, empty,
+// damaged, a directory, or being written by another study. what() names the file.
+class StoreError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+// How a Store is opened: the one open path for every command.
+//   read       never creates or changes anything (report, export, --dry-run); works on
+//              stores shared read-only (a cluster's project folder, a published data set)
+//   write      open or create (with its folder); the schema is created when missing
+//   exclusive  write, and hold "<file>.lock" (flock) while open: a second study on the
+//              same store refuses at start instead of running every job twice
+enum class StoreAccess { read, write, exclusive };
+
 class Store {
  public:
-  // Open or create (with its folder); the schema is created when missing.
-  explicit Store(const std::filesystem::path& file);
+  // Throws StoreError when the file is not a usable store (see StoreAccess).
+  explicit Store(const std::filesystem::path& file, StoreAccess access = StoreAccess::write);
   ~Store();
   Store(const Store&) = delete;
   Store& operator=(const Store&) = delete;
@@ -106,7 +123,9 @@ class Store {
 
  private:
   std::vector<StoredRun> select_runs(const char* where, const std::optional<std::string>& arg) const;
-
+  void open(const std::filesystem::path& file, StoreAccess access);
+  class WriterLock;
+  std::unique_ptr<WriterLock> lock_;  // held while open with StoreAccess::exclusive
   sqlite3* db_ = nullptr;
   mutable std::mutex mutex_;
   std::string shard_;

@@ -4,6 +4,7 @@
 // in the list is a programming error, so the list cannot drift from the reader.
 #include "studies/study.hpp"
 
+#include "common/input_bounds.hpp"
 #include "common/text_file.hpp"
 #include "common/toml_parse.hpp"
 #include "common/toml_strict.hpp"
@@ -82,14 +83,18 @@ AxisValue axis_value(const toml::node& n, SourceLocation where) { return {toml_t
 // rounded to 12 significant digits so that 0.1 + 2 * 0.1 reads "0.3".
 std::vector<AxisValue> range_values(StrictTable& t, const toml::node& from, const toml::node& to,
                                     const toml::node& step) {
-  const char* numeric = "must be a number";
-  if (!from.is_number()) t.fail("from", from, numeric);
-  if (!to.is_number()) t.fail("to", to, numeric);
-  if (!step.is_number() || step.value<double>().value() <= 0) t.fail("step", step, "must be a number > 0");
-  const double lo = from.value<double>().value(), hi = to.value<double>().value(), dv = step.value<double>().value();
+  auto finite = [&](const char* key, const toml::node& n) {
+    const std::optional<double> v = number_value(n);
+    if (!v || !std::isfinite(*v)) t.fail(key, n, "must be a finite number");
+    return *v;
+  };
+  const double lo = finite("from", from), hi = finite("to", to), dv = finite("step", step);
+  if (dv <= 0) t.fail("step", step, "must be a finite number > 0");
   if (hi < lo) t.fail("to", to, fmt::format("must be >= from ({})", toml_text(from)));
   const double steps = std::floor((hi - lo) / dv + 1e-9);
-  if (steps > 100000) t.fail("step", step, "gives more than 100000 values");
+  if (!(steps < kMaxAxisValues))
+    t.fail("step", step, fmt::format("gives more than {} values from {} to {}", kMaxAxisValues, toml_text(from),
+                                     toml_text(to)));
   const bool integral = from.is_integer() && to.is_integer() && step.is_integer();
   std::vector<AxisValue> out;
   for (int i = 0; i <= static_cast<int>(steps); ++i) {
@@ -122,7 +127,8 @@ SweepAxis read_axis(StrictTable t) {
     axis.values = range_values(t, *from, *to, *step);
   } else {
     if (!values) t.missing("values", either);
-    if (values->empty()) t.fail("values", *values, "must not be empty");
+    if (values->empty() || values->size() > static_cast<std::size_t>(kMaxAxisValues))
+      t.fail("values", *values, fmt::format("must hold 1 to {} values", kMaxAxisValues));
     for (const toml::node& n : *values) {
       if (!n.is_number() && !n.is_string() && !n.is_boolean())
         throw ScenarioError(t.at(n), t.dotted("values"), toml_text(n), "each value must be a number, string or boolean");
@@ -168,16 +174,16 @@ QuickDef read_quick(StrictTable t) {
   q.present = true;
   if (!t.get("replicates") && !t.get("models") && !t.get("thin"))
     t.missing("replicates", "[quick] must set replicates, models or thin: an empty one is no cheaper study");
-  if (auto r = t.integer("replicates", 1)) q.replicates = static_cast<int>(*r);
+  if (auto r = t.integer("replicates", 1, kMaxReplicates)) q.replicates = static_cast<int>(*r);
   if (t.get("models")) q.models = read_models(t);
-  if (auto k = t.integer("thin", 1)) q.thin = static_cast<int>(*k);
+  if (auto k = t.integer("thin", 1, kMaxAxisValues)) q.thin = static_cast<int>(*k);
   return q;
 }
 
 ModelPlan read_plan(StrictTable t) {
   ModelPlan m;
-  if (auto r = t.integer("replicates", 1)) m.replicates = static_cast<int>(*r);
-  if (auto k = t.integer("thin", 1)) m.thin = static_cast<int>(*k);
+  if (auto r = t.integer("replicates", 1, kMaxReplicates)) m.replicates = static_cast<int>(*r);
+  if (auto k = t.integer("thin", 1, kMaxAxisValues)) m.thin = static_cast<int>(*k);
   return m;
 }
 
@@ -197,8 +203,8 @@ ConfirmDef read_confirm(StrictTable t) {
   ConfirmDef c;
   c.enabled = true;
   c.model = parse_model_kind(one_of(t, "model", {"2d", "3d"}, "3d"));
-  if (auto k = t.integer("top", 1)) c.top = static_cast<int>(*k);
-  if (auto r = t.integer("replicates", 1)) c.replicates = static_cast<int>(*r);
+  if (auto k = t.integer("top", 1, kMaxStudyJobs)) c.top = static_cast<int>(*k);
+  if (auto r = t.integer("replicates", 1, kMaxReplicates)) c.replicates = static_cast<int>(*r);
   c.rank_by = one_of(t, "rank_by", kJKinds, c.rank_by);
   c.set = read_set(t);
   return c;
@@ -220,7 +226,8 @@ ReportDef read_report(StrictTable t) {
   if (auto b = t.text("baseline", true)) r.baseline = *b;
   r.j = one_of(t, "j", kJKinds, r.j);
   for (const char* k : {"fit_w_min", "fit_w_max"})  // read by the report (studies/report.cpp)
-    if (const toml::node* n = t.get(k); n && !n->is_number()) t.fail(k, *n, "must be a number (W/d)");
+    if (const toml::node* n = t.get(k); n && !(number_value(*n) && std::isfinite(*number_value(*n))))
+      t.fail(k, *n, "must be a finite number (W/d)");
   return r;
 }
 
@@ -231,7 +238,7 @@ void read_study_section(StrictTable t, StudyDef& d) {
   if (name->find_first_of("/\\") != std::string::npos)
     t.fail("name", *t.get("name"), "must not contain / or \\ (it names a folder)");
   if (auto desc = t.text("description")) d.description = *desc;
-  if (auto r = t.integer("replicates", 1)) d.replicates = static_cast<int>(*r);
+  if (auto r = t.integer("replicates", 1, kMaxReplicates)) d.replicates = static_cast<int>(*r);
   d.models = read_models(t);
   if (auto seed = t.integer("seed", 0)) d.seed = static_cast<std::uint64_t>(*seed);
   d.set = read_set(t);
@@ -281,9 +288,7 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
 }
 
 StudyDef load_study(const std::filesystem::path& file) {
-  const std::optional<std::string> text = read_text_file(file);
-  if (!text) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the study file");
-  StudyDef d = parse_study(*text, file.string(), file.parent_path());
+  StudyDef d = parse_study(read_input_file(file, "study file"), file.string(), file.parent_path());
   d.file = file;
   return d;
 }

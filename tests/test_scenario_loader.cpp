@@ -156,7 +156,7 @@ TEST(ScenarioLoader, ErrorMessageNamesFileLineKeyValueAndRule) {
   ASSERT_TRUE(e);
   EXPECT_EQ(e->value(), "-3");
   EXPECT_EQ(std::string(e->what()), "test.toml:4:" + std::to_string(e->where().column) +
-                                        ": key 'bottleneck.gap_mm' = -3: must be > 0 (mm)");
+                                        ": key 'bottleneck.gap_mm' = -3: must be in (0, 100000] (mm)");
 }
 
 TEST(ScenarioLoader, UnknownKeyListsTheAllowedKeys) {
@@ -314,7 +314,7 @@ TEST(ScenarioLoader, OverridesReplaceFileValuesAndAreLocated) {
 TEST(ScenarioLoader, OverrideErrorNamesTheOverride) {
   auto e = error_of(kHead, {"bottleneck.gap_mm=-3"});
   ASSERT_TRUE(e);
-  EXPECT_EQ(std::string(e->what()), "--set:1:19: key 'bottleneck.gap_mm' = -3: must be > 0 (mm)");
+  EXPECT_EQ(std::string(e->what()), "--set:1:19: key 'bottleneck.gap_mm' = -3: must be in (0, 100000] (mm)");
 }
 
 TEST(ScenarioLoader, OverrideCanAddSectionsAndArrays) {

@@ -1,7 +1,10 @@
 #include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cstdio>
 
 namespace gapflow::testing {
 
@@ -36,5 +39,24 @@ TempDir::TempDir(const std::string& prefix) {
 }
 
 TempDir::~TempDir() { std::filesystem::remove_all(path_); }
+
+std::string shell_quoted(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+CliResult run_gapflow(const std::string& args, int timeout_s) {
+  const std::string cmd = "timeout -s KILL " + std::to_string(timeout_s) + " " GAPFLOW_BINARY_DIR "/app/gapflow " +
+                          args + " 2>&1";
+  CliResult r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) r.output.append(buf, n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
 
 }  // namespace gapflow::testing

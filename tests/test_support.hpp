@@ -33,4 +33,14 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// One run of the gapflow command line (build/app/gapflow) under `timeout`.
+struct CliResult {
+  int code = -1;       // exit code; 124 = timed out, 128 + n = killed by signal n
+  std::string output;  // standard output and standard error, interleaved
+};
+// args are passed to the shell as written (quote what needs quoting).
+CliResult run_gapflow(const std::string& args, int timeout_s = 30);
+// Single-quoted for the shell.
+std::string shell_quoted(const std::string& s);
+
 }  // namespace gapflow::testing
