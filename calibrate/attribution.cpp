@@ -2,6 +2,7 @@
 
 #include "common/statistics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 
@@ -76,6 +77,15 @@ ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_par
 
 double bic(double chi2, int parameters, int points) {
   return chi2 + parameters * std::log(static_cast<double>(points));
+}
+
+std::vector<int> rivals_of(const std::vector<double>& scores, double delta) {
+  std::vector<int> out;
+  if (scores.empty()) return out;
+  const double best = *std::max_element(scores.begin(), scores.end());
+  for (std::size_t i = 0; i < scores.size(); ++i)
+    if (best - scores[i] < delta) out.push_back(static_cast<int>(i));
+  return out;
 }
 
 }  // namespace gapflow

@@ -43,6 +43,13 @@ Score score_signature(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
 std::vector<std::vector<int>> indistinguishable_groups(const std::vector<Eigen::VectorXd>& signatures,
                                                        const Eigen::MatrixXd& X, double threshold = 0.9);
 
+// Rivals of the best candidate: indices whose score statistic is within `delta`
+// of the largest (the best included). The one-effect fit of candidate i removes
+// scores[i] from chi^2, so the difference is the likelihood-ratio statistic between
+// two one-effect models; with delta = chi2_1(1 - alpha) the rivals are a
+// (1 - alpha) confidence set of "which effect". Empty for no scores.
+std::vector<int> rivals_of(const std::vector<double>& scores, double delta);
+
 struct ChiSquare {
   double chi2 = 0;
   int dof = 0;

@@ -13,7 +13,13 @@ OUT/cases.csv and OUT/confusion.png:
 * identification rate of single planted effects (alone or inside a reported group);
 * coverage of the recovered sizes' 95 % intervals;
 * the null cases' false-positive rate;
-* the error on held-out points before and after (re-scored on fresh seeds), per twin.
+* the error on held-out points before and after (re-scored on fresh seeds), per twin;
+* how visible each planted effect was in its twin's data (truth/<id>.json "signal",
+  computed by `gapflow twin` with the truth: the same runs without the effect, the
+  free parameters' sensitivities projected out, in noise units), and the
+  identification rate split by it: an effect the data do not contain cannot be found,
+  and "none" is then the right answer;
+* the cost of one calibration from an empty store (CPU seconds of all its runs).
 """
 import csv
 import json
@@ -55,6 +61,9 @@ def said(summary):
     return label, added
 
 
+VISIBLE_POWER = 0.8  # oracle power above which a planted effect counts as visible in its data
+
+
 def main(out):
     out = Path(out)
     rows = []
@@ -75,6 +84,7 @@ def main(out):
             exact = [a for a in hit if a["effect"] == p["name"]]
             if exact:
                 covered.append(exact[0]["lo95"] <= p["value"] <= exact[0]["hi95"])
+        signal = truth.get("signal")
         b, a = summary["before"], summary["after"]
         rows.append({
             "case": case,
@@ -93,6 +103,11 @@ def main(out):
             "heldout_rmse_after": a["held_out_fresh"]["rmse"],
             "heldout_rms_sigma_before": b["held_out_fresh"]["rms_whitened"],
             "heldout_rms_sigma_after": a["held_out_fresh"]["rms_whitened"],
+            "signal_chi2": signal["chi2"] if signal else "",
+            "oracle_power": signal["oracle_power"] if signal else "",
+            "visible": (signal["oracle_power"] >= VISIBLE_POWER) if signal else "",
+            "runs_total": summary["runs_simulated"] + summary["runs_reused"],
+            "cpu_s": summary["run_seconds"],
             "runs_simulated": summary["runs_simulated"],
             "wall_s": summary["wall_seconds"],
         })
@@ -115,6 +130,15 @@ def main(out):
     found_rows = [r for r in single + two if r["identified"] is True]
     halved = sum(1 for r in found_rows if r["heldout_rmse_after"] is not None and r["heldout_rmse_before"]
                  and r["heldout_rmse_after"] <= 0.5 * r["heldout_rmse_before"])
+
+    visible = [r for r in single if r["visible"] is True]
+    hidden = [r for r in single if r["visible"] is False]
+    ident_visible = sum(1 for r in visible if r["identified"] is True)
+    hidden_none = sum(1 for r in hidden if r["said"] == "none")
+    hidden_wrong = sum(1 for r in hidden if r["said"] not in ("none", "unexplained") and r["identified"] is not True)
+    cpu = sorted(r["cpu_s"] for r in rows if r["truth"] != "3D model")
+    runs = sorted(r["runs_total"] for r in rows if r["truth"] != "3D model")
+    median = lambda v: v[len(v) // 2] if v else float("nan")  # noqa: E731
 
     # Confusion matrix.
     truths = sorted({r["truth"] for r in rows}, key=lambda t: (t in ("none", "two effects", "outside the catalogue", "3D model"), t))
@@ -155,6 +179,13 @@ def main(out):
         f"* two-effect twins: {', '.join(r['case'] + ' -> ' + r['said'] for r in two) or 'none'}",
         f"* 95 % intervals of recovered sizes that contain the planted value: {pct(covered, intervals)}",
         f"* where an effect was planted and found, held-out RMSE (fresh seeds) at least halved: {pct(halved, len(found_rows))}",
+        f"* single planted effects visible in their data (oracle power >= {VISIBLE_POWER}): {len(visible)} of {len(single)}; "
+        f"of these identified: {pct(ident_visible, len(visible))}",
+        f"* single planted effects not visible in their data: {len(hidden)}; the loop said \"none\" (the right answer for "
+        f"these data) in {pct(hidden_none, len(hidden))}, added a wrong effect in {pct(hidden_wrong, len(hidden))}",
+        f"* cost of one calibration from an empty store (median over the 2D-made twins): {median(runs)} runs, "
+        f"{median(cpu):.0f} CPU-s, about {median(cpu) / 2 / 60:.1f} min on 2 cores (range {cpu[0]:.0f}-{cpu[-1]:.0f} CPU-s)"
+        if cpu else "* cost: no twins",
         "",
         "## Confusion matrix",
         "",
@@ -169,14 +200,19 @@ def main(out):
         lines.append(f"| {t} | " + " | ".join(str(counts[(t, c)] or "") for c in cols) + " |")
     lines += ["", "![confusion](confusion.png)", "", "## Every twin", "",
               "Held-out RMSE on the fit scale (log: ~relative error), re-scored by direct simulation on fresh seeds.", "",
-              "| case | planted | friction (truth) | said | added [95 %] | chi2/nu before -> after | held-out RMSE before -> after | runs | wall s |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "*signal*: lambda = chi^2 that the planted effect adds to these data beyond what the free parameters absorb "
+              "(computed with the truth; the calibration never sees it), and the power of a score test that knew the "
+              "planted signature, at the loop's Bonferroni level. *runs*: simulated by this calibration (the others were "
+              "found in the store, shared between twins); *CPU s*: all runs of the calibration.", "",
+              "| case | planted | friction (truth) | signal lambda (power) | said | added [95 %] | chi2/nu before -> after | held-out RMSE before -> after | runs | CPU s | wall s |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['case']} | {r['planted'] or '-'} | {r['free_truth']} | {r['said']} | {r['added'] or '-'} | "
+        sig = f"{r['signal_chi2']:.1f} ({r['oracle_power']:.2f})" if r["signal_chi2"] != "" else "-"
+        lines.append(f"| {r['case']} | {r['planted'] or '-'} | {r['free_truth']} | {sig} | {r['said']} | {r['added'] or '-'} | "
                      f"{r['chi2nu_before']:.2f} -> {r['chi2nu_after']:.2f} | {r['heldout_rmse_before']:.4f} -> "
-                     f"{r['heldout_rmse_after']:.4f} | {r['runs_simulated']} | {r['wall_s']:.0f} |")
+                     f"{r['heldout_rmse_after']:.4f} | {r['runs_simulated']} | {r['cpu_s']:.0f} | {r['wall_s']:.0f} |")
     open(out / "report.md", "w").write("\n".join(lines) + "\n")
-    print("\n".join(lines[:16]))
+    print("\n".join(lines[:20]))
 
 
 if __name__ == "__main__":

@@ -173,6 +173,11 @@ class Loop {
       cands[c].p_adjusted = std::min(1.0, cands[c].score.p * n_tests);
       if (cands[c].score.statistic > best_stat) best_stat = cands[c].score.statistic, round.best = cands[c].effect;
     }
+    // Rivals: candidates these data cannot rank below the best (calibrate/attribution.hpp).
+    std::vector<double> visible_scores;
+    for (std::size_t c : visible_index) visible_scores.push_back(cands[c].score.statistic);
+    for (int m : rivals_of(visible_scores, chi_square_quantile(1 - def_.alpha, 1)))
+      round.rivals.push_back(cands[visible_index[static_cast<std::size_t>(m)]].effect);
     const auto groups = indistinguishable_groups(visible_u, X, def_.group_cosine);
     for (std::size_t g = 0; g < groups.size(); ++g) {
       for (int m : groups[g]) cands[visible_index[static_cast<std::size_t>(m)]].group = static_cast<int>(g);
@@ -191,10 +196,17 @@ class Loop {
     return nullptr;
   }
 
+  // What an added effect stands for: its |cos| group and, if it is the best, its rivals.
   std::vector<std::string> group_of(const Round& round, const Candidate& c) const {
+    std::vector<std::string> out{c.effect};
+    auto add = [&](const std::vector<std::string>& names) {
+      for (const std::string& n : names)
+        if (std::find(out.begin(), out.end(), n) == out.end()) out.push_back(n);
+    };
     for (const auto& g : round.groups)
-      if (std::find(g.begin(), g.end(), c.effect) != g.end()) return g;
-    return {c.effect};
+      if (std::find(g.begin(), g.end(), c.effect) != g.end()) add(g);
+    if (c.effect == round.best) add(round.rivals);
+    return out;
   }
 
  private:

@@ -11,7 +11,10 @@
 //      (same seeds), whitened, the fitted parameters' sensitivities projected out;
 //      an effect whose step does not move the model beyond its noise is "not
 //      visible in this design"; a score test for each visible one (Bonferroni over
-//      the candidates); signatures with |cos| > 0.9 form a group, never a pick;
+//      the candidates); signatures with |cos| > 0.9 form a group, never a pick,
+//      and so do the rivals: candidates whose score is within chi2_1(1 - alpha) = 3.84
+//      of the best one's (the score is the chi^2 a one-effect fit removes, so these
+//      are the effects the data cannot rank below the best at that level);
 //   4. the best candidate (if significant) is fitted jointly with the free
 //      parameters (BOBYQA), its size given with a profile interval, and kept only
 //      if BIC and the held-out chi^2 both improve; a second round may add one more;
@@ -76,6 +79,8 @@ struct Candidate {
 struct Round {
   std::vector<Candidate> candidates;
   std::vector<std::vector<std::string>> groups;  // effects the design cannot tell apart (size > 1 only)
+  std::vector<std::string> rivals;  // visible candidates whose score is within chi2_1(1 - alpha) of the best:
+                                    // a 95 % confidence set of "which effect"; these data cannot rank them
   std::string best;              // best-scoring visible candidate ("" if none)
   std::string decision;          // what the round concluded, one sentence
 };

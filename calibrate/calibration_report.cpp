@@ -64,8 +64,8 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
     const Round& rd = r.rounds[i];
     std::string groups;
     for (const auto& g : rd.groups) groups += (groups.empty() ? "" : ", ") + json_list(g);
-    o << fmt::format("{}\n    {{\"best\": {}, \"decision\": {}, \"groups\": [{}], \"candidates\": [", i ? "," : "",
-                     json_string(rd.best), json_string(rd.decision), groups);
+    o << fmt::format("{}\n    {{\"best\": {}, \"decision\": {}, \"groups\": [{}], \"rivals\": {}, \"candidates\": [",
+                     i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals));
     for (std::size_t c = 0; c < rd.candidates.size(); ++c) {
       const Candidate& k = rd.candidates[c];
       o << fmt::format(R"({}{{"effect": {}, "step": {}, "visible": {}, "visibility_p": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "group": {}}})",
@@ -138,6 +138,9 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                        c.visible ? fmt::format("{:.4g} ± {:.2g}", c.neutral + c.score.estimate, c.score.se) : "",
                        c.group >= 0 ? std::to_string(c.group) : "");
     for (const auto& g : rd.groups) o << fmt::format("\nIndistinguishable in this design (|cos| > 0.9): {}.\n", fmt::join(g, ", "));
+    if (rd.rivals.size() > 1)
+      o << fmt::format("\nThese data cannot rank them below the best (score within chi2_1(0.95) = 3.84 of {}): {}.\n",
+                       rd.best, fmt::join(rd.rivals, ", "));
     o << fmt::format("\nDecision: {}.\n", rd.decision);
   }
   o << "\n## Log\n\n```\n";

@@ -59,11 +59,13 @@ bool key_applies_to(const std::string& key, const ScenarioDef& point) {
   return point.obstruction.shape == ObstructionShape::triangle || point.obstruction.shape == ObstructionShape::polygon;
 }
 
-double neutral_value(const EffectDef& effect, const DataFile& data) {
+double template_value(const std::string& key, const DataFile& data) {
   // The canonical TOML of the resolved template holds every key that is set; keys
   // written only when set (the effects' switches) are absent at their default, 0.
   const toml::table doc = toml::parse(canonical_toml(data.point_scenario(0).def));
-  return toml::at_path(doc, effect.key).value<double>().value_or(0.0);
+  return toml::at_path(doc, key).value<double>().value_or(0.0);
 }
+
+double neutral_value(const EffectDef& effect, const DataFile& data) { return template_value(effect.key, data); }
 
 }  // namespace gapflow

@@ -44,5 +44,7 @@ bool key_applies_to(const std::string& key, const ScenarioDef& point);
 // The value the data file's template (with its fixed overrides) gives the effect's
 // key: the model "without the effect".
 double neutral_value(const EffectDef& effect, const DataFile& data);
+// The same for any numeric scenario key (0 where the template leaves it unset).
+double template_value(const std::string& key, const DataFile& data);
 
 }  // namespace gapflow

@@ -1,5 +1,6 @@
 #include "calibrate/twin.hpp"
 
+#include "calibrate/calibration.hpp"
 #include "calibrate/effect_catalogue.hpp"
 #include "common/random.hpp"
 #include "common/statistics.hpp"
@@ -8,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -61,6 +63,77 @@ void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, con
   }
 }
 
+// The planted values replaced by what the design's template has without them;
+// the free parameters keep their true values.
+ParameterSet without_planted_effects(const DataFile& design, const TwinTruth& truth) {
+  ParameterSet out;
+  for (const PlantedValue& v : truth.planted)
+    out = out.with(v.key, v.name == "free" ? v.value : template_value(v.key, design));
+  return out;
+}
+
+// The noise a calibration of the twin sees at point i, on the fit scale: the twin
+// file's se (with the design's floor) and the model's at the design's replicate count.
+double calibration_sigma(const DataFile& design, const TwinDef& def, const Prediction& with, std::size_t i) {
+  const double floor = design.floor_relative * (design.scale == FitScale::log ? 1.0 : with.value[i]);
+  const double model_share = static_cast<double>(def.replicates) / design.model_replicates;
+  return std::hypot(std::hypot(with.se_fit[i], floor), with.se_fit[i] * std::sqrt(model_share));
+}
+
+// chi^2 over the fitted points between the twin's data and the model without the
+// planted effects, both on the twin's seeds (their difference is not the packing).
+double chi2_between(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without) {
+  double chi2 = 0;
+  for (std::size_t i = 0; i < design.points.size(); ++i) {
+    if (design.points[i].held_out || !with.valid[i]) continue;
+    const double w = without.valid[i] ? (with.fit[i] - without.fit[i]) / calibration_sigma(design, def, with, i) : 10.0;
+    chi2 += w * w;
+  }
+  return chi2;
+}
+
+// lambda = min over the free parameter of chi2_between: how far the data with the
+// planted effects lie from everything the model without them can reach by refitting
+// (the nonlinear projection; friction saturates, so a linear one overstates lambda).
+// One free parameter: its calibration grid, refined by a parabola through the best
+// node and its neighbours. Several: their true values only (an upper bound, said so).
+PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const TwinTruth& truth, const Prediction& with,
+                             Evaluator& ev) {
+  PlantedSignal sig;
+  const bool any_effect = std::any_of(truth.planted.begin(), truth.planted.end(),
+                                      [](const PlantedValue& v) { return v.name != "free"; });
+  if (!any_effect) return sig;
+  const ParameterSet without = without_planted_effects(design, truth);
+  std::vector<double> nodes;
+  std::vector<ParameterSet> sets;
+  if (design.free.size() == 1) {
+    const FreeParameter& f = design.free.front();
+    for (double v = f.lo; v <= f.hi + 1e-9 * f.step; v += f.step) nodes.push_back(v);
+    for (double v : nodes) sets.push_back(without.with(f.key, v));
+  } else {
+    sets.push_back(without);
+  }
+  const std::vector<Prediction> p = ev.evaluate(sets, truth.model_seed, def.replicates);
+  std::vector<double> chi2;
+  for (const Prediction& q : p) chi2.push_back(chi2_between(design, def, with, q));
+  const std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
+  sig.chi2 = chi2[best];
+  if (best > 0 && best + 1 < chi2.size()) {  // parabola through three equally spaced nodes
+    const double curvature = chi2[best - 1] - 2 * chi2[best] + chi2[best + 1];
+    if (curvature > 0) sig.chi2 = std::max(0.0, chi2[best] - std::pow(chi2[best + 1] - chi2[best - 1], 2) / (8 * curvature));
+  }
+  for (std::size_t i = 0; i < design.points.size(); ++i) sig.points += !design.points[i].held_out && with.valid[i] ? 1 : 0;
+  int candidates = 0;
+  for (const EffectDef& e : effect_catalogue()) candidates += effect_applies(e, def.model, design) ? 1 : 0;
+  const double alpha = CalibrationDef{}.alpha / std::max(1, candidates);
+  sig.known = true;
+  sig.critical = chi_square_quantile(1 - alpha, 1);
+  // Score statistic ~ (Z + sqrt(lambda))^2 for a known signature: noncentral chi^2_1.
+  const double a = std::sqrt(sig.critical), b = std::sqrt(sig.chi2);
+  sig.oracle_power = normal_cdf(-a - b) + 1 - normal_cdf(a - b);
+  return sig;
+}
+
 }  // namespace
 
 TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
@@ -101,10 +174,11 @@ TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
 
 TwinTruth make_twin(const DataFile& design, const TwinDef& def, Evaluator& evaluator,
                     const std::filesystem::path& data_out, const std::filesystem::path& truth_out) {
-  const TwinTruth truth = draw_twin(design, def);
+  TwinTruth truth = draw_twin(design, def);
   ParameterSet planted;
   for (const PlantedValue& v : truth.planted) planted = planted.with(v.key, v.value);
   const Prediction p = evaluator.evaluate({planted}, truth.model_seed, def.replicates).front();
+  truth.signal = planted_signal(design, def, truth, p, evaluator);
   write_file_atomically(data_out, [&](std::ostream& o) { write_twin_file(o, design, def, p, data_out); });
   write_file_atomically(truth_out, [&](std::ostream& o) {
     o << "{\n  \"twin\": \"" << def.name << "\",\n  \"model\": \"" << to_string(def.model) << "\",\n";
@@ -115,7 +189,13 @@ TwinTruth make_twin(const DataFile& design, const TwinDef& def, Evaluator& evalu
       o << fmt::format("{}\n    {{\"name\": \"{}\", \"key\": \"{}\", \"value\": {}, \"neutral\": {}}}", i ? "," : "", v.name,
                        v.key, v.value, std::isfinite(v.neutral) ? fmt::format("{}", v.neutral) : "null");
     }
-    o << "\n  ]\n}\n";
+    o << "\n  ],\n";
+    const PlantedSignal& g = truth.signal;
+    if (!g.known)
+      o << "  \"signal\": null\n}\n";
+    else
+      o << fmt::format("  \"signal\": {{\"chi2\": {}, \"points\": {}, \"critical\": {}, \"oracle_power\": {}}}\n}}\n",
+                       g.chi2, g.points, g.critical, g.oracle_power);
   });
   return truth;
 }

@@ -31,9 +31,22 @@ struct PlantedValue {
   double value = 0, neutral = 0;
 };
 
+// How strongly the planted effects show in the twin's data: the same runs (same
+// seeds) without them, the free parameters refitted, in units of the noise a
+// calibration of the twin sees. Computed with the truth, for judging the blind
+// study; `gapflow calibrate` never reads it.
+struct PlantedSignal {
+  bool known = false;     // false: nothing planted (a null twin, or the other model's data as they are)
+  double chi2 = 0;        // lambda = min over the free parameter of chi^2(data, model without the effects), fitted points
+  int points = 0;         // fitted points
+  double critical = 0;    // the score test's threshold at the loop's Bonferroni level
+  double oracle_power = 0;// P(score > critical) for a score test that knew the planted signature
+};
+
 struct TwinTruth {
   std::vector<PlantedValue> planted;
   std::uint64_t model_seed = 0;  // run.seed of the twin's runs (never the calibration's)
+  PlantedSignal signal;
 };
 
 // The planted values (drawn from def.seed), without running anything.

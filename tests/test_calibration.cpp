@@ -8,11 +8,14 @@
 #include "calibrate/evaluator.hpp"
 #include "calibrate/twin.hpp"
 #include "common/random.hpp"
+#include "common/statistics.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <iostream>
 #include <thread>
 
 namespace gapflow {
@@ -73,6 +76,37 @@ TEST(Attribution, CollinearSignaturesFormOneGroup) {
   EXPECT_EQ(groups[1], (std::vector<int>{2}));
   // Projecting out a shared direction can make two signatures distinguishable (and vice versa).
   EXPECT_GT(abs_cosine(a, b), 0.99);
+}
+
+TEST(Attribution, RivalsAreTheCandidatesWithinDeltaOfTheBest) {
+  EXPECT_EQ(rivals_of({14.2, 18.4, 15.1, 17.5, 11.0}, 3.84), (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(rivals_of({5.0}, 3.84), (std::vector<int>{0}));
+  EXPECT_TRUE(rivals_of({}, 3.84).empty());
+}
+
+TEST(Attribution, RivalsCoverThePlantedSignature) {
+  // Three signatures, two of them alike (|cos| ~ 0.8, below the group threshold):
+  // the planted one is among the rivals about 95 % of the time, and the best-scoring
+  // pick alone is wrong far more often than that.
+  const int n = 10;
+  const Eigen::MatrixXd X(n, 0);
+  const Eigen::VectorXd u0 = ramp(n, -1, 1), u1 = ramp(n, -1, 1) + 0.4 * noise(n, 3), u2 = noise(n, 7);
+  ASSERT_LT(abs_cosine(u0, u1), 0.9);
+  ASSERT_GT(abs_cosine(u0, u1), 0.6);
+  int covered = 0, picked = 0;
+  const int trials = 400;
+  for (std::uint64_t seed = 1; seed <= trials; ++seed) {
+    const Eigen::VectorXd r = 3.5 * u0 / u0.norm() + noise(n, 1000 + seed);  // lambda = 12
+    std::vector<double> scores;
+    for (const Eigen::VectorXd* u : {&u0, &u1, &u2}) scores.push_back(score_signature(r, X, *u).statistic);
+    const std::vector<int> rv = rivals_of(scores, chi_square_quantile(0.95, 1));
+    covered += std::find(rv.begin(), rv.end(), 0) != rv.end() ? 1 : 0;
+    picked += std::max_element(scores.begin(), scores.end()) == scores.begin() ? 1 : 0;
+  }
+  EXPECT_GT(covered, 0.9 * trials) << covered;
+  EXPECT_LT(picked, covered) << picked;
+  std::cout << "planted signature among the rivals in " << covered << " of " << trials << ", best-scoring in " << picked
+            << "\n";
 }
 
 TEST(Attribution, BicKeepsARealEffectAndRejectsANullOne) {
@@ -284,8 +318,13 @@ TEST(CalibrationEndToEnd, RecoversAPlantedDragAndLeavesANullTwinAlone) {
   const bool in_group = std::find(e.group.begin(), e.group.end(), "linear_drag") != e.group.end();
   EXPECT_TRUE(e.effect == "linear_drag" || in_group) << e.effect;
   EXPECT_LT(planted.result.after.fitted.chi.chi2, planted.result.before.fitted.chi.chi2);
+  // The truth says how visible the planted drag was; a null twin has nothing to measure.
+  EXPECT_TRUE(planted.truth.signal.known);
+  EXPECT_GT(planted.truth.signal.chi2, planted.truth.signal.critical);
+  EXPECT_GT(planted.truth.signal.oracle_power, 0.5);
 
   const TinyRun null = tiny_calibration(dir, {}, 22);
+  EXPECT_FALSE(null.truth.signal.known);
   EXPECT_TRUE(null.result.effects.empty()) << null.result.effects.front().effect;
 }
 
