@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -268,7 +269,14 @@ void draw_one(Snapshot& s, std::size_t i, const Job& job, const fs::path& dir, s
   def.snapshot_dir = (dir / fmt::format(".snapshot-{}.tmp", i + 1)).string();
   def.view.colour_by = p.at_clog ? Colouring::state : Colouring::speed;
   def.view.title = p.cls;
-  fs::remove_all(def.snapshot_dir);
+  struct RemoveOnExit {  // the scratch folder goes, whatever happens to the re-run
+    fs::path dir;
+    ~RemoveOnExit() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } scratch{def.snapshot_dir};
+  fs::remove_all(scratch.dir);
   std::atomic<bool> stop{false};
   const auto wall0 = std::chrono::steady_clock::now();
   const std::clock_t cpu0 = std::clock();
@@ -295,7 +303,6 @@ void draw_one(Snapshot& s, std::size_t i, const Job& job, const fs::path& dir, s
       s.width = view.width(), s.height = view.height();
     }
   }
-  fs::remove_all(def.snapshot_dir);
   s.passed_stored = static_cast<int>(std::count_if(p.run->record.crossings.begin(), p.run->record.crossings.end(),
                                                    [&](const Crossing& c) { return c.t <= s.t_drawn_s; }));
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
