@@ -15,6 +15,7 @@ struct ReportCommand::Options {
   CLI::App* cmd = nullptr;
   std::string results, study, out;
   bool no_plots = false;
+  bool no_snapshots = false;
 };
 
 namespace {
@@ -26,6 +27,7 @@ int cmd_report(const ReportCommand::Options& o) {
   if (!o.study.empty()) r.study = o.study;
   if (!o.out.empty()) r.out = o.out;
   r.plots = !o.no_plots;
+  r.snapshots = !o.no_snapshots;
   make_report(r, std::cout, std::cerr);
   return 0;
 }
@@ -43,6 +45,8 @@ ReportCommand::ReportCommand(CLI::App& app) : o_(std::make_unique<Options>()) {
                     "baseline, J kind)");
   o.cmd->add_option("--out", o.out, "Output folder (default: the store's folder)");
   o.cmd->add_flag("--no-plots", o.no_plots, "Do not call Python for the PNG plots");
+  o.cmd->add_flag("--no-snapshots", o.no_snapshots,
+                  "Do not re-simulate one stored run per point class for the report's top-view snapshots");
 }
 
 ReportCommand::~ReportCommand() = default;

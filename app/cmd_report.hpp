@@ -1,10 +1,11 @@
 // The `gapflow report` subcommand.
 //
-//   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots]
+//   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots] [--no-snapshots]
 //
 // RESULTS is a study's results store (runs.sqlite) or its folder. Writes
 // points.csv, plots (PNG, via studies/plot_study.py) and report.md into DIR
-// (default: the store's folder) and prints the tables. The study file is
+// (default: the store's folder) and prints the tables; unless --no-snapshots, one
+// re-simulated top view per point class (studies/report_snapshots.hpp). The study file is
 // optional; its [report] table picks the experiment analysis
 // (studies/report.hpp).
 //

@@ -4,7 +4,7 @@
 //   gapflow check SCENARIO.toml [--set key=value]... [--print]
 //   gapflow study STUDY.toml [--quick] [--jobs N] [--db PATH] [--dry-run]
 //   gapflow export DB --table TABLE --csv OUT.csv
-//   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots]
+//   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots] [--no-snapshots]
 //   gapflow calibrate DATA.toml [--model 2d|3d] ...   gapflow twin DATA.toml --out ... --truth ...
 //   gapflow merge OUT.sqlite SHARD.sqlite... | compare A.sqlite B.sqlite | slurm STUDY.toml [--array-size K]
 //   gapflow serve SCENARIO.toml [--model 2d|3d] [--port 8080]   (live view in a browser)

@@ -377,6 +377,16 @@ std::vector<const ReportPoint*> points_of(const ReportData& data, const std::str
   return out;
 }
 
+const ReportPoint* best_point(const std::vector<const ReportPoint*>& points, JKind j) {
+  const ReportPoint* best = nullptr;
+  for (const ReportPoint* p : points) {
+    const MeanCI m = mean_ci(j_stats(p->stats, j).t);
+    const bool complete = m.n > 0 && m.n == p->stats.n_runs;
+    if (complete && (!best || m.mean > mean_ci(j_stats(best->stats, j).t).mean)) best = p;
+  }
+  return best;
+}
+
 std::vector<std::pair<std::string, std::string>> series_models(const ReportData& data) {
   std::vector<std::pair<std::string, std::string>> out;
   for (const ReportPoint& p : data.points) {

@@ -133,6 +133,9 @@ double x_value(const ReportPoint& p, const XAxis& x);
 
 // Points of one series and model, in point order.
 std::vector<const ReportPoint*> points_of(const ReportData& data, const std::string& series, const std::string& model);
+// The point of largest mean J among those where every run has J (a point where only some
+// runs emptied would be ranked by its lucky runs alone); nullptr when none has.
+const ReportPoint* best_point(const std::vector<const ReportPoint*>& points, JKind j);
 // (series, model) pairs in report order.
 std::vector<std::pair<std::string, std::string>> series_models(const ReportData& data);
 
@@ -313,6 +316,7 @@ struct ReportRequest {
   std::optional<std::filesystem::path> study;  // study file
   std::optional<std::filesystem::path> out;    // default: the store's folder
   bool plots = true;
+  bool snapshots = true;  // one re-simulated top view per point class (studies/report_snapshots.hpp)
 };
 // The command that regenerates the report (paths as given).
 std::string regenerate_command(const ReportRequest& r);
@@ -321,6 +325,8 @@ struct ReportOutcome {
   std::filesystem::path out_dir, points_csv, markdown;
   std::vector<std::filesystem::path> pngs;  // written
   std::string plot_warning;                 // why plots are missing ("" when drawn)
+  std::vector<std::filesystem::path> snapshots;  // written
+  std::string snapshot_warning;                  // why snapshots are missing ("" when drawn or none wanted)
   std::size_t n_points = 0, n_runs = 0;
 };
 
@@ -331,6 +337,7 @@ struct MarkdownInput {
   std::vector<PlotFigure> figures;  // the generic ones (experiment curves drawn in)
   std::vector<std::string> pngs;    // file names of the plots actually written
   std::string plot_warning;
+  std::string snapshots;  // the "Snapshots" section (snapshots_markdown), "" = none
   std::string command;
 };
 std::string render_report_markdown(const MarkdownInput& in);

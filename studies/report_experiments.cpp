@@ -81,14 +81,9 @@ DistanceResult distance_result(const ReportData& data, const std::string& series
     return a->stats.distance_over_d < b->stats.distance_over_d;
   });
   r.n_points = pts.size();
-  const ReportPoint* peak = nullptr;
+  const ReportPoint* peak = best_point(pts, opt.j);  // first of equals in D order, as before
   std::vector<std::pair<double, Verdict>> by_d;
   for (const ReportPoint* p : pts) {
-    const MeanCI m = mean_ci(j_stats(p->stats, opt.j).t);
-    // A peak needs J in every run: a point where some runs never emptied would
-    // otherwise be ranked by its lucky runs alone.
-    const bool complete = m.n > 0 && m.n == p->stats.n_runs;
-    if (complete && (!peak || m.mean > mean_ci(j_stats(peak->stats, opt.j).t).mean)) peak = p;
     const ReportPoint* ref = baseline_for(data, *p);
     if (!ref) continue;
     const RatioComparison c = compare_to_baseline(p->stats, ref->stats, opt.j);

@@ -1,6 +1,8 @@
 // Report output: report.md and make_report(), which writes every file of a report.
 #include "studies/report.hpp"
 
+#include "studies/report_snapshots.hpp"
+
 #include "common/text_file.hpp"
 
 #include <fmt/format.h>
@@ -111,6 +113,7 @@ std::string render_report_markdown(const MarkdownInput& in) {
   if (!links.empty() || !in.plot_warning.empty()) out += "## Plots\n\n";
   if (!in.plot_warning.empty()) out += "*No plots: " + in.plot_warning + "*\n\n";
   out += links;
+  out += in.snapshots;
   for (const ExperimentSection& e : in.experiments) {
     out += "## Analysis: " + e.title + "\n\n";
     for (const std::string& p : e.paragraphs) out += p + "\n\n";
@@ -126,6 +129,7 @@ std::string regenerate_command(const ReportRequest& r) {
   if (r.study) c += " --study " + shell_quote(r.study->string());
   if (r.out) c += " --out " + shell_quote(r.out->string());
   if (!r.plots) c += " --no-plots";
+  if (!r.snapshots) c += " --no-snapshots";
   return c;
 }
 
@@ -213,6 +217,26 @@ std::string draw(const std::vector<PlotFigure>& figures, const fs::path& dir, st
   return pngs.size() == figures.size() ? "" : "some figures were not written";
 }
 
+// Re-runs one stored run per point class and draws it; the report's Snapshots section.
+std::string report_snapshots(const ReportRequest& request, const fs::path& db, const std::vector<StoredRun>& runs,
+                             const ReportData& data, ReportOutcome& o, std::ostream& log) {
+  if (!request.snapshots) return snapshots_markdown({}, "not requested (--no-snapshots)");
+  const std::vector<SnapshotPick> picks = choose_snapshots(data, runs);
+  if (picks.empty()) return snapshots_markdown({}, "");
+  std::vector<Snapshot> shots;
+  try {
+    const StudyDef study = study_for_snapshots(db, request.study, data.study.name);
+    shots = draw_snapshots(picks, study, runs, o.out_dir, log);
+  } catch (const std::exception& e) {  // e.g. the recorded study file's scenario paths do not resolve from here
+    o.snapshot_warning = fmt::format("the study's jobs could not be rebuilt: {}", e.what());
+    log << "warning: no snapshots: " << o.snapshot_warning << "\n";
+    return snapshots_markdown({}, o.snapshot_warning);
+  }
+  for (const Snapshot& s : shots)
+    if (!s.file.empty()) o.snapshots.push_back(o.out_dir / s.file);
+  return snapshots_markdown(shots, "");
+}
+
 void print_experiment(std::ostream& out, const ExperimentSection& e) {
   out << "\n== " << e.title << " ==\n";
   for (const std::string& p : e.paragraphs) out << p << "\n\n";
@@ -224,7 +248,8 @@ void print_experiment(std::ostream& out, const ExperimentSection& e) {
 ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::ostream& log) {
   const fs::path db = store_file(request.results);
   const StudyInfo info = request.study ? read_study_info(*request.study) : recorded_study_info(db, log);
-  const ReportData data = collect_report_data(load_runs(db, info), info);
+  const std::vector<StoredRun> runs = load_runs(db, info);
+  const ReportData data = collect_report_data(runs, info);
   const ReportOptions& opt = data.study.report;
   if (!opt.baseline.empty() && std::none_of(data.points.begin(), data.points.end(),
                                             [&](const ReportPoint& p) { return p.series == opt.baseline; }))
@@ -259,11 +284,12 @@ ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::
   if (!md.plot_warning.empty()) log << "warning: no plots: " << md.plot_warning << "\n";
   for (const std::string& f : md.pngs) o.pngs.push_back(o.out_dir / f);
   o.plot_warning = md.plot_warning;
+  md.snapshots = report_snapshots(request, db, runs, data, o, log);
 
   o.markdown = o.out_dir / "report.md";
   write_file_atomically(o.markdown, [&](std::ostream& s) { s << render_report_markdown(md); });
-  out << fmt::format("wrote {}, {}, {} plot(s) in {}\n", o.points_csv.filename().string(),
-                     o.markdown.filename().string(), o.pngs.size(), o.out_dir.string());
+  out << fmt::format("wrote {}, {}, {} plot(s), {} snapshot(s) in {}\n", o.points_csv.filename().string(),
+                     o.markdown.filename().string(), o.pngs.size(), o.snapshots.size(), o.out_dir.string());
   return o;
 }
 

@@ -2,10 +2,14 @@
 // and the experiment analyses on hand-built stored runs whose answers are known.
 #include "studies/jobs.hpp"
 #include "studies/report.hpp"
+#include "studies/report_snapshots.hpp"
 #include "studies/runner.hpp"
 #include "studies/store.hpp"
 #include "studies/study.hpp"
 #include "tests/test_support.hpp"
+#include "view/top_view.hpp"
+
+#include <cairo.h>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -15,6 +19,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <unistd.h>
 
@@ -427,6 +432,81 @@ TEST_F(ReportTiny, EveryAnalysisKindRunsOnRealDataWithoutCrashing) {
   }
 }
 
+// Pixels inside the board (below the caption, left of the legend) that are a sphere's colour:
+// the speed scale (viridis) or the flowing / arch / stuck states. Walls, board, gap line and
+// their anti-aliased edges are none of these.
+int sphere_pixels(const TopView& layout, const CompiledScenario& sc, const std::function<Rgb(int, int)>& colour_at) {
+  std::vector<Rgb> palette;
+  for (int i = 0; i <= 256; ++i) palette.push_back(speed_colour(i / 256.0, 1.0));
+  for (ParticleState st : {ParticleState::flowing, ParticleState::arch, ParticleState::stuck})
+    palette.push_back(state_colour(st));
+  auto near = [](Rgb a, Rgb b) { return std::abs(a.r - b.r) <= 2 && std::abs(a.g - b.g) <= 2 && std::abs(a.b - b.b) <= 2; };
+  const TopView::Pixel from = layout.to_pixel({-sc.channel_width / 2, sc.plane_length});
+  const TopView::Pixel to = layout.to_pixel({sc.channel_width / 2, -0.05});
+  int n = 0;
+  for (int row = from.row; row < to.row; ++row)
+    for (int col = from.col; col < to.col; ++col) {
+      const Rgb c = colour_at(col, row);
+      n += std::any_of(palette.begin(), palette.end(), [&](Rgb p) { return near(c, p); });
+    }
+  return n;
+}
+
+// Report snapshots: one PNG per point class (tiny has no [report] kind: each series at its
+// best point), each a re-run of a stored run that reproduces its crossings up to the picture,
+// of the stated size, with spheres on the board, and embedded in report.md; --no-snapshots
+// leaves them out and says so.
+TEST_F(ReportTiny, SnapshotsAreReRunsOfStoredRunsEmbeddedInTheReport) {
+  const ReportOutcome o = make(false);
+  ASSERT_EQ(o.snapshots.size(), 2u) << log_text;
+  const std::string md = read_text(o.markdown);
+  EXPECT_NE(md.find("## Snapshots"), std::string::npos) << md;
+  EXPECT_LT(md.find("## Snapshots"), md.find("## Regenerate"));
+  // The layout of any tiny point (the plane is the same at every point), and a negative control:
+  // a board without spheres has no sphere pixels.
+  const CompiledScenario sc = gapflow::testing::compile_file("scenarios/paper/no_obstruction_medium.toml",
+                                                             {"particles.count=60"});
+  TopView empty(sc, TopViewDef{});
+  FrameState nothing;
+  nothing.model = "2d";
+  empty.draw(nothing);
+  EXPECT_EQ(sphere_pixels(empty, sc, [&](int c, int r) { return empty.colour_at({c, r}); }), 0);
+  for (const fs::path& png : o.snapshots) {
+    EXPECT_NE(md.find("](" + png.filename().string() + ")"), std::string::npos) << png << " embedded";
+    cairo_surface_t* image = cairo_image_surface_create_from_png(png.c_str());
+    ASSERT_EQ(cairo_surface_status(image), CAIRO_STATUS_SUCCESS) << png << " is not a readable PNG";
+    const int w = cairo_image_surface_get_width(image), h = cairo_image_surface_get_height(image);
+    EXPECT_EQ(w, empty.width());
+    EXPECT_EQ(h, empty.height());
+    EXPECT_NE(md.find(fmt::format("{} x {} px", w, h)), std::string::npos) << "the size the report states";
+    const unsigned char* data = cairo_image_surface_get_data(image);
+    const int stride = cairo_image_surface_get_stride(image);
+    const int spheres = sphere_pixels(empty, sc, [&](int c, int r) {
+      const unsigned char* px = data + static_cast<std::size_t>(r) * static_cast<std::size_t>(stride) + 4 * c;
+      return Rgb{px[2], px[1], px[0]};
+    });
+    EXPECT_GT(spheres, 300) << png << ": at least ~10 spheres of ~45 px each on the board";
+    cairo_surface_destroy(image);
+  }
+  // Each caption names its stored run by job key and says the re-run reproduced it.
+  int keys = 0;
+  for (const StoredRun& r : Store(dir / "runs.sqlite").load()) keys += md.find("`" + r.id.key + "`") != std::string::npos;
+  EXPECT_EQ(keys, 2);
+  std::size_t same = 0;
+  for (std::size_t at = 0; (at = md.find("as the stored run: the picture is of that run", at)) != std::string::npos; ++at)
+    ++same;
+  EXPECT_EQ(same, 2u) << md;
+  EXPECT_EQ(o.snapshot_warning, "");
+
+  request.snapshots = false;
+  const ReportOutcome none = make(false);
+  EXPECT_TRUE(none.snapshots.empty());
+  const std::string plain = read_text(none.markdown);
+  EXPECT_NE(plain.find("*No snapshots: not requested (--no-snapshots)*"), std::string::npos) << plain;
+  EXPECT_EQ(plain.find("](snapshot_"), std::string::npos);
+  EXPECT_NE(plain.find("--no-plots --no-snapshots"), std::string::npos) << "the regenerate command";
+}
+
 // ------------------------------------------------------------------ flow_vs_distance on known data
 
 TEST(ReportFlowVsDistance, FindsThePeakAndTheSignificantRanges) {
@@ -509,6 +589,21 @@ TEST(ReportFlowVsDistance, FindsThePeakAndTheSignificantRanges) {
             std::string::npos)
       << md;
   EXPECT_NE(out.str().find("n/a"), std::string::npos) << "the clogged point prints n/a";
+
+  // Snapshot classes of a distance study: the reference and the cylinder at its peak (30 mm),
+  // the replicate nearest the median J; the study's scenario file does not exist, so the
+  // report says why it has no pictures instead of failing.
+  const std::vector<StoredRun> runs = Store(dir / "runs.sqlite").load();
+  const std::vector<SnapshotPick> picks = choose_snapshots(data, runs);
+  ASSERT_EQ(picks.size(), 2u);
+  EXPECT_EQ(picks[0].cls, "J_0 reference");
+  EXPECT_EQ(picks[0].point->series, "none");
+  EXPECT_EQ(picks[1].cls, "cylinder at its best position");
+  EXPECT_EQ(picks[1].point->point_label, "obstruction.distance_mm=30");
+  EXPECT_TRUE(picks[1].run->id.replicate == 2 || picks[1].run->id.replicate == 3) << picks[1].run_why;
+  EXPECT_FALSE(picks[1].at_clog);
+  EXPECT_NEAR(picks[1].t_s, picks[1].run->record.sim_time_s / 2, 1e-12) << "no crossings stored: half-way";
+  EXPECT_NE(md.find("*No snapshots: the study's jobs could not be rebuilt"), std::string::npos) << md;
 
   // Without --study: a bare report and a warning, until the store records the study file.
   req.study.reset();

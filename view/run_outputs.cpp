@@ -105,6 +105,8 @@ void RunOutputs::after_step(double t, const EngineSession& session, const GapMon
   }
 }
 
+const std::vector<std::string>& RunOutputs::written() const { return w_->written; }
+
 std::vector<std::string> RunOutputs::finish() {
   Writers& w = *w_;
   std::vector<std::string> lines;

@@ -38,6 +38,8 @@ class RunOutputs {
   const StepObserver& observer() const { return observer_; }
   // After the run: close the movie and the ParaView collection; returns one line per output written.
   std::vector<std::string> finish();
+  // The PNG files written so far (snapshots and clog snapshots), in order.
+  const std::vector<std::string>& written() const;
 
  private:
   void after_step(double t, const EngineSession& session, const GapMonitor& monitor);
