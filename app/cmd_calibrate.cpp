@@ -4,6 +4,7 @@
 #include "app/cli_errors.hpp"
 #include "calibrate/calibration_report.hpp"
 #include "calibrate/twin.hpp"
+#include "studies/mpi_runner.hpp"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -19,7 +20,7 @@ struct CalibrateCommands::Options {
   CLI::App* twin = nullptr;
   std::string data_file, model = "2d", out, db, truth;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  bool no_plots = false;
+  bool no_plots = false, mpi = false, check = false;
   int max_effects = 2;
   // twin
   std::uint64_t seed = 1;
@@ -40,17 +41,37 @@ EvaluatorOptions evaluator_options(const CalibrateCommands::Options& o) {
   return e;
 }
 
+// --check: the data file read, every point's scenario resolved and compiled, nothing run.
+int print_data_check(const DataFile& data) {
+  std::cout << fmt::format("{}: {} points ({} held out), observable {} on a {} scale, {} free parameter(s), {} model "
+                           "replicates per point; source: {} ({})\n",
+                           data.name, data.points.size(), data.points.size() - data.fitted_count(),
+                           to_string(data.observable), data.scale == FitScale::log ? "log" : "linear", data.free.size(),
+                           data.model_replicates, data.source.citation, data.source.method);
+  return 0;
+}
+
 int cmd_calibrate(const CalibrateCommands::Options& o) {
   const DataFile data = load_data_file(o.data_file);
+  if (o.check) return print_data_check(data);
   const std::filesystem::path out = o.out.empty() ? std::filesystem::path("results/calibration") / data.name : std::filesystem::path(o.out);
   const std::filesystem::path db = o.db.empty() ? out / "runs.sqlite" : std::filesystem::path(o.db);
   CalibrationDef def;
   def.model = parse_model_kind(o.model);
   def.max_effects = o.max_effects;
-  Store store(db, StoreAccess::exclusive);  // one calibration or twin per store at a time
+  // Under MPI every rank has read and checked the data file; ranks >= 1 only simulate.
+  std::unique_ptr<MpiSession> mpi = o.mpi ? std::make_unique<MpiSession>() : nullptr;
   g_cancel.store(false);
   CancelOnSignal signals;
-  Evaluator ev(data, store, evaluator_options(o));
+  if (mpi && mpi->rank() > 0) {
+    mpi->worker_loop(&g_cancel);
+    return 0;
+  }
+  Store store(db, StoreAccess::exclusive);  // one calibration or twin per store at a time
+  EvaluatorOptions options = evaluator_options(o);
+  if (mpi)
+    options.runner = [&](const std::vector<Job>& jobs, Store& s, const RunnerOptions& ro) { return mpi->run_jobs(jobs, s, ro); };
+  Evaluator ev(data, store, options);
   std::cerr << fmt::format("calibrate '{}' against the {} model: {} points ({} held out), {} replicates per point, store {}\n",
                            data.name, o.model, data.points.size(), data.points.size() - data.fitted_count(),
                            data.model_replicates, db.string());
@@ -111,6 +132,10 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
   o.calibrate->add_option("--db", o.db, "Runs store (default <out>/runs.sqlite; calibrations may share one)");
   o.calibrate->add_option("--max-effects", o.max_effects, "Rounds of adding an effect")->check(CLI::Range(0, 4));
   o.calibrate->add_flag("--no-plots", o.no_plots, "Do not draw the PNG figures");
+  o.calibrate->add_flag("--check", o.check, "Read and check the data file (every point's scenario compiled), run nothing");
+  o.calibrate->add_flag("--mpi", o.mpi,
+                        "Run as an MPI job (mpirun -np N gapflow calibrate ... --mpi): rank 0 runs the loop and writes "
+                        "the store, ranks 1..N-1 simulate; the result equals a local calibration");
 
   o.twin = app.add_subcommand("twin", "Write a data file made by a model with hidden effects (truth in a separate file)");
   o.twin->add_option("data", o.data_file, "Data file whose design (points, observable, free parameters) the twin copies")->required();

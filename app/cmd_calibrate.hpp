@@ -1,6 +1,6 @@
 // The `gapflow calibrate` and `gapflow twin` subcommands (calibrate/).
 //
-//   gapflow calibrate DATA.toml [--model 2d|3d] [--jobs N] [--out DIR] [--db PATH] [--no-plots]
+//   gapflow calibrate DATA.toml [--model 2d|3d] [--jobs N] [--out DIR] [--db PATH] [--no-plots] [--mpi]
 //   gapflow twin DATA.toml --out TWIN.toml --truth TRUTH.json [--model 2d|3d] [--seed S]
 //                [--effect NAME[:low|:high|=VALUE]]... [--set key=value]... [--replicates N] [--name NAME]
 #pragma once

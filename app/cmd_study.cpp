@@ -93,8 +93,6 @@ void print_dry_run(const StudyDef& study, const std::vector<Job>& jobs, const st
 }
 
 // Screen -> confirm: rank the screened points and run the best again with the confirming model.
-using JobRunner = std::function<RunnerSummary(const std::vector<Job>&, Store&, const RunnerOptions&)>;
-
 RunnerSummary run_confirm_stage(const StudyDef& study, Store& store, const RunnerOptions& options,
                                 RunnerSummary screen, const JobRunner& run) {
   const std::vector<RankedPoint> ranked = rank_screened_points(study, store.load(study.name));

@@ -184,8 +184,12 @@ std::vector<std::string> point_columns(const DataFile& d) {
 // that it is validated exactly like an inline [[point]].
 std::vector<DataPoint> read_csv_points(const std::filesystem::path& csv, const SourceLocation& from, const DataFile& d,
                                        const std::string& uncertainty_kind) {
-  const std::optional<std::string> text = read_text_file(csv);
-  if (!text) throw ScenarioError(from, "points.csv", "\"" + csv.string() + "\"", "cannot open the CSV file");
+  std::optional<std::string> text;
+  try {
+    text = read_input_file(csv, "CSV file of points");
+  } catch (const FileError& e) {  // said where the data file names it
+    throw ScenarioError(from, "points.csv", "\"" + csv.string() + "\"", "cannot be read: " + e.reason());
+  }
   std::istringstream in(*text);
   std::string line;
   std::vector<std::string> header;
@@ -302,9 +306,7 @@ DataFile parse_data_file(std::string_view text, std::string_view source_name, co
 }
 
 DataFile load_data_file(const std::filesystem::path& file) {
-  const std::optional<std::string> text = read_text_file(file);
-  if (!text) throw ScenarioError({file.string(), 0, 0}, "", "", "cannot open the data file");
-  DataFile d = parse_data_file(*text, file.string(), file.parent_path());
+  DataFile d = parse_data_file(read_input_file(file, "data file"), file.string(), file.parent_path());
   d.file = file;
   return d;
 }

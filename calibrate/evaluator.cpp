@@ -187,7 +187,7 @@ std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& set
   std::set<std::string> seen;
   for (const Job& j : jobs)
     if (seen.insert(j.id.key).second) unique.push_back(j);
-  const RunnerSummary summary = run_jobs(unique, store_, ro);
+  const RunnerSummary summary = options_.runner ? options_.runner(unique, store_, ro) : run_jobs(unique, store_, ro);
   if (summary.cancelled) throw RunCancelled();
   if (!summary.failed.empty())
     throw std::runtime_error(fmt::format("{} model runs failed; first: {} ({})", summary.failed.size(),

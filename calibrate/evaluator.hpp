@@ -53,6 +53,7 @@ double from_fit_scale(FitScale scale, double v);
 
 struct EvaluatorOptions {
   ModelKind model = ModelKind::box2d;
+  JobRunner runner;  // empty: run_jobs on `workers` threads; an MPI job passes rank 0's (studies/mpi_runner.hpp)
   int workers = 1;
   const std::atomic<bool>* cancel = nullptr;
   std::ostream* progress = nullptr;

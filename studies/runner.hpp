@@ -39,6 +39,10 @@ struct RunnerSummary {
 
 RunnerSummary run_jobs(const std::vector<Job>& jobs, Store& store, const RunnerOptions& options);
 
+// Something that runs the jobs a store lacks into it: run_jobs, or an MPI job's rank 0
+// (studies/mpi_runner.hpp). Studies and calibrations take either.
+using JobRunner = std::function<RunnerSummary(const std::vector<Job>&, Store&, const RunnerOptions&)>;
+
 // The jobs not yet in the store (resume), in order; sets summary.total and summary.already_stored.
 std::vector<const Job*> jobs_to_run(const std::vector<Job>& jobs, const Store& store, RunnerSummary& summary);
 

@@ -238,49 +238,7 @@ TEST(EffectCatalogue, EveryEntryIsAScenarioKeyWithARangeAndAStep) {
 // ---------------------------------------------------------------------------
 // End to end on a tiny 2D design: 60 spheres, 4 points, no free parameter.
 
-const char* kTinyDesign = R"(
-[data]
-name = "tiny"
-[source]
-citation = "test design"
-method = "simulated"
-uncertainty = "placeholders"
-[model]
-scenario = "scenarios/paper/no_obstruction_medium.toml"
-set = ["particles.count=60", "release.settle_s=0.2", "run.time_limit_s=15", "run.stop_after_no_flow_s=5"]
-replicates = 3
-[observable]
-kind = "j_mid"
-floor_relative = 0.005
-[[design]]
-column = "W_over_d"
-key = "bottleneck.gap_mm"
-unit = "d"
-[[design]]
-column = "incline_deg"
-key = "plane.incline_deg"
-[[point]]
-W_over_d = 4
-incline_deg = 5
-value = 1
-uncertainty = 1
-[[point]]
-W_over_d = 5
-incline_deg = 8
-value = 1
-uncertainty = 1
-[[point]]
-W_over_d = 4
-incline_deg = 12
-value = 1
-uncertainty = 1
-[[point]]
-W_over_d = 5
-incline_deg = 12
-value = 1
-uncertainty = 1
-held_out = true
-)";
+// The tiny design (data/examples/tiny_design.toml): four points of 60 spheres, three replicates.
 
 struct TinyRun {
   CalibrationResult result;
@@ -289,7 +247,7 @@ struct TinyRun {
 
 TinyRun tiny_calibration(const TempDir& dir, const std::vector<std::string>& effects, std::uint64_t seed,
                          const std::atomic<bool>* cancel = nullptr) {
-  const DataFile design = parse_data_file(kTinyDesign, "tiny.toml", source_path(""));
+  const DataFile design = load_data_file(source_path("data/examples/tiny_design.toml"));
   Store twin_store(dir / "twin.sqlite");
   EvaluatorOptions eo;
   eo.workers = 2;

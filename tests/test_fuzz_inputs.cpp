@@ -1,4 +1,4 @@
-// Seeded mutation fuzzer over the shipped scenario and study files, through the real
+// Seeded mutation fuzzer over the shipped scenario, study and measured-data files, through the real
 // command line: every mutant must end in exit 0 or 2 within the time bound, never a
 // signal (crash, abort), exit 1 or a hang (killed by `timeout`, 137).
 //
@@ -6,7 +6,7 @@
 //   on demand:     GAPFLOW_FUZZ_CASES=5000 GAPFLOW_FUZZ_SEED=7 build/tests/gapflow_tests --gtest_filter='Fuzz*'
 //
 // A failing mutant is written to tests/fuzz_corpus/found_<seed>_<case>.toml (the message
-// says so): fix the bug, rename the file (scenario_*.toml or study_*.toml) and keep it;
+// says so): fix the bug, rename the file (scenario_*.toml, study_*.toml or data_*.toml) and keep it;
 // the regression corpus is replayed by FuzzCorpus.* on every test run.
 #include "tests/test_support.hpp"
 
@@ -142,6 +142,13 @@ std::string absolute_scenarios(std::string text) {
   return std::regex_replace(text, std::regex(R"(\.\./\.\./scenarios/)"), source_path("scenarios").string() + "/");
 }
 
+// A data file's scenario and CSV are relative to it; the mutant lives elsewhere.
+std::string absolute_data_paths(std::string text, const fs::path& base) {
+  const std::string dir = base.parent_path().string() + "/";
+  text = std::regex_replace(text, std::regex(R"((scenario\s*=\s*")([^"/][^"]*"))"), "$1" + dir + "$2");
+  return std::regex_replace(text, std::regex(R"((csv\s*=\s*")([^"/][^"]*"))"), "$1" + dir + "$2");
+}
+
 bool acceptable(int code) { return code == 0 || code == 2; }
 
 std::string describe(const CliResult& r) {
@@ -153,24 +160,29 @@ std::string describe(const CliResult& r) {
 TEST(Fuzz, MutatedScenarioAndStudyFilesExitZeroOrTwo) {
   const int cases = env_int("GAPFLOW_FUZZ_CASES", kDefaultCases);
   const std::uint64_t seed = static_cast<std::uint64_t>(env_int("GAPFLOW_FUZZ_SEED", 1));
-  const std::vector<fs::path> scenarios = files_in("scenarios"), studies = files_in("studies");
+  const std::vector<fs::path> scenarios = files_in("scenarios"), studies = files_in("studies"), data_files = files_in("data");
   ASSERT_FALSE(scenarios.empty());
+  ASSERT_FALSE(data_files.empty());
   ASSERT_FALSE(studies.empty());
   TempDir dir("fuzz");
   Mutator m(seed);
   int failures = 0, by_code[3] = {0, 0, 0};
   const auto start = std::chrono::steady_clock::now();
   for (int i = 0; i < cases; ++i) {
-    const bool study = m.below(3) == 0;
-    const fs::path& base = study ? m.pick(studies) : m.pick(scenarios);
+    const int kind = m.below(6);  // 0-1 study, 2 measured-data file, 3-5 scenario
+    const bool study = kind < 2, data = kind == 2;
+    const fs::path& base = study ? m.pick(studies) : data ? m.pick(data_files) : m.pick(scenarios);
     std::string text = read_all(base);
     if (study) text = absolute_scenarios(text);
+    if (data) text = absolute_data_paths(text, base);
     const std::string mutant = m.mutate(text);
     const fs::path file = dir / (std::to_string(i) + ".toml");
     std::ofstream(file, std::ios::binary) << mutant;
     std::string args;
     if (study) {
       args = "study " + shell_quoted(file.string()) + " --dry-run --db " + shell_quoted((dir / "none.sqlite").string());
+    } else if (data) {
+      args = "calibrate " + shell_quoted(file.string()) + " --check";
     } else {
       args = "check " + shell_quoted(file.string());
       for (const std::string& o : m.overrides()) args += " --set " + shell_quoted(o);
@@ -182,7 +194,7 @@ TEST(Fuzz, MutatedScenarioAndStudyFilesExitZeroOrTwo) {
     }
     ++failures;
     const fs::path keep = source_path("tests/fuzz_corpus") /
-                          fmt::format("found_{}_{}_{}.toml", study ? "study" : "scenario", seed, i);
+                          fmt::format("found_{}_{}_{}.toml", study ? "study" : data ? "data" : "scenario", seed, i);
     std::ofstream(keep, std::ios::binary) << mutant;
     ADD_FAILURE() << "case " << i << " (seed " << seed << ", from " << base.filename().string() << "): "
                   << describe(r) << "\n  gapflow " << args << "\n  mutant kept as " << keep.string() << "\n"
@@ -202,9 +214,11 @@ TEST(FuzzCorpus, EveryKeptInputEndsInExitTwo) {
     if (p.extension() != ".toml") continue;
     const std::string name = p.filename().string();
     const bool study = name.rfind("study_", 0) == 0 || name.find("_study_") != std::string::npos;
-    const CliResult r =
-        run_gapflow((study ? "study " : "check ") + shell_quoted(p.string()) + (study ? " --dry-run --db /nonexistent/x" : ""),
-                    kTimeBoundS);
+    const bool data = name.rfind("data_", 0) == 0 || name.find("_data_") != std::string::npos;
+    const std::string args = study ? "study " + shell_quoted(p.string()) + " --dry-run --db /nonexistent/x"
+                             : data ? "calibrate " + shell_quoted(p.string()) + " --check"
+                                    : "check " + shell_quoted(p.string());
+    const CliResult r = run_gapflow(args, kTimeBoundS);
     EXPECT_EQ(r.code, 2) << name << ": " << describe(r) << "\n" << r.output;
     ++n;
   }
