@@ -97,23 +97,7 @@ namespace {
 
 // A few spheres, no settling; they are placed by hand (x = 0, a column down the fall line).
 std::string column_scenario(int count, double incline_deg) {
-  return R"(
-[scenario]
-name = "rolling contact column"
-[plane]
-incline_deg = )" + std::to_string(incline_deg) + R"(
-length_mm = 3000.0
-width_mm = 600.0
-[bottleneck]
-gap_mm = 300.0
-[particles]
-count = )" + std::to_string(count) + R"(
-diameter_mm = "medium"
-size_scatter = 0.0
-[release]
-barrier_mm = 1500.0
-settle_s = 0.0
-)";
+  return gapflow::testing::open_board_scenario("rolling contact column", count, incline_deg);
 }
 
 // Mean contact forces (engine N) of a column of spheres 0, 1, ... upward along +y on x = 0,
@@ -221,7 +205,7 @@ TEST(RollingContactKey, DefaultIsOffAndUnwrittenSetValueReadsBackOutOfRangeIsRej
             std::string::npos);
   // In a file: file:line:column.
   const std::string file_error = error_of({}, text + "[model.box2d]\nrolling_contact = 2.0\n");
-  EXPECT_NE(file_error.find("k.toml:18:"), std::string::npos) << file_error;
+  EXPECT_NE(file_error.find("k.toml:17:"), std::string::npos) << file_error;
 }
 
 // Spheres rolling down the 8-degree board at 0.1 m/s behind a stop that descends at that speed.
