@@ -147,6 +147,8 @@ struct Box2DDef {
   bool continuous_collision = false;// Box2D's time-of-impact pass: 19 % of the instructions, unneeded while a
                                     // particle moves < 0.1 d per step against walls thicker than d
   double engine_diameter = 1.0;     // engine length units per nominal particle diameter (Froude scaling)
+  double rolling_contact = 0.0;     // fraction (0-1) of the derived vertical sliding friction at contacts of
+                                    // rolling spheres (RollingContactEffect); 0 = off. 2D only: 3D has it natively
   Box2DRollingDef rolling;
   Box2DBaseFrictionDef base_friction;
 };

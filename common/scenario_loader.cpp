@@ -528,6 +528,7 @@ void read_box2d(Section s, Box2DDef& b) {
   s.boolean("sleeping", b.sleeping);
   s.boolean("continuous_collision", b.continuous_collision);
   s.number("engine_diameter", b.engine_diameter, closed(0.05, 20));
+  s.number("rolling_contact", b.rolling_contact, closed(0, 1, "fraction of the derived force"));
   Section rolling = s.section("rolling");
   Section base = s.section("base_friction");
   s.finish();
@@ -535,6 +536,10 @@ void read_box2d(Section s, Box2DDef& b) {
   rolling.boolean("enabled", b.rolling.enabled);
   rolling.number("inertia_factor", b.rolling.inertia_factor, lower_open(0, 1));
   rolling.finish();
+  // The effect's force law assumes spheres rolling without slipping on the board.
+  if (b.rolling_contact > 0 && !b.rolling.enabled)
+    s.fail_value("rolling_contact", toml_double(b.rolling_contact),
+                 "must be 0 when model.box2d.rolling.enabled = false (the effect acts through the rolling spin)");
 
   base.boolean("enabled", b.base_friction.enabled);
   if (auto m = base.choice<BaseFrictionMethod>("method", {{"force", BaseFrictionMethod::force},
@@ -788,6 +793,7 @@ void write_model(TomlWriter& w, const ModelDef& m) {
   w.put("sleeping", m.box2d.sleeping);
   w.put("continuous_collision", m.box2d.continuous_collision);
   w.put("engine_diameter", m.box2d.engine_diameter);
+  if (m.box2d.rolling_contact != 0) w.put("rolling_contact", m.box2d.rolling_contact);
   w.section("model.box2d.rolling");
   w.put("enabled", m.box2d.rolling.enabled);
   w.put("inertia_factor", m.box2d.rolling.inertia_factor);

@@ -1,5 +1,7 @@
 #include "sim2d/effects2d.hpp"
 
+#include "common/vec2_math.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -91,6 +93,67 @@ void QuadraticDragEffect::before_step(World2D& w) {
   }
 }
 
+Vec2 rolling_contact_force(Vec2 vi, Vec2 vj, Vec2 n, double normal_force, double mu, double inv_mass_sum,
+                           double h) {
+  const double s = dot(n, vi + vj);  // vertical sliding speed at the contact
+  if (s == 0 || normal_force <= 0 || mu <= 0) return {0, 0};
+  double f = mu * normal_force;
+  // Over h both spheres gain -f sign(s) n h / M: s changes by -f sign(s) h inv_mass_sum.
+  if (h > 0 && inv_mass_sum > 0) f = std::min(f, std::abs(s) / (h * inv_mass_sum));
+  return (s > 0 ? -f : f) * n;
+}
+
+namespace {
+
+Vec2 vec(b2Vec2 v) { return {v.x, v.y}; }
+
+// Particle id of a fixture's body, -1 for walls, obstruction and barrier.
+int particle_id(b2Fixture* f) {
+  if (static_cast<FixtureKind>(f->GetUserData().pointer) != FixtureKind::particle) return -1;
+  return static_cast<int>(f->GetBody()->GetUserData().pointer) - 1;
+}
+
+}  // namespace
+
+void RollingContactEffect::before_step(World2D& w) {
+  const double h = w.dt_engine;
+  force_.assign(w.particles.size(), b2Vec2_zero);
+  for (b2Contact* c = w.world->GetContactList(); c; c = c->GetNext()) {
+    if (!c->IsTouching() || !c->IsEnabled()) continue;
+    const b2Manifold* m = c->GetManifold();
+    double impulse = 0;  // solved in the previous step
+    for (int k = 0; k < m->pointCount; ++k) impulse += m->points[k].normalImpulse;
+    if (impulse <= 0) continue;
+    int i = particle_id(c->GetFixtureA()), j = particle_id(c->GetFixtureB());
+    if (i < 0 && j < 0) continue;
+    b2WorldManifold wm;
+    c->GetWorldManifold(&wm);  // normal from A to B
+    Vec2 n = vec(wm.normal);
+    if (i < 0) {  // the particle is B: its partner (a wall) is A
+      std::swap(i, j);
+      n = -1.0 * n;
+    }
+    b2Body* bi = w.particles[static_cast<size_t>(i)];
+    b2Body* bj = j >= 0 ? w.particles[static_cast<size_t>(j)] : nullptr;
+    const Vec2 vj = bj ? vec(bj->GetLinearVelocity()) : Vec2{0, 0};  // a wall does not roll
+    const double inv_mass = 1.0 / bi->GetMass() + (bj ? 1.0 / bj->GetMass() : 0.0);
+    const Vec2 f = rolling_contact_force(vec(bi->GetLinearVelocity()), vj, n, impulse / h,
+                                         lambda_ * c->GetFriction(), inv_mass, h);
+    const b2Vec2 fe(static_cast<float>(f.x), static_cast<float>(f.y));
+    force_[static_cast<size_t>(i)] += fe;
+    if (bj) force_[static_cast<size_t>(j)] += fe;
+  }
+  for (int i : w.active) {
+    b2Vec2 f = force_[static_cast<size_t>(i)];
+    const double len = f.Length();
+    if (len == 0) continue;
+    // The board's friction supplies f/(1+k): at most mu_base m g cos(theta).
+    const double cap = (1 + k_) * mu_base_ * w.props[static_cast<size_t>(i)].true_mass * w.normal_gravity;
+    if (len > cap) f *= static_cast<float>(cap / len);
+    w.particles[static_cast<size_t>(i)]->ApplyForceToCenter(f, false);
+  }
+}
+
 std::vector<std::unique_ptr<ReducedEffect2D>> make_effects2d(const CompiledScenario& sc) {
   std::vector<std::unique_ptr<ReducedEffect2D>> effects;
   const Box2DDef& m = sc.def.model.box2d;
@@ -101,6 +164,8 @@ std::vector<std::unique_ptr<ReducedEffect2D>> make_effects2d(const CompiledScena
                                                            p.spinning_friction_mm * 1e-3));
   if (p.drag_per_s > 0) effects.push_back(std::make_unique<LinearDragEffect>(p.drag_per_s));
   if (p.quadratic_drag_per_m > 0) effects.push_back(std::make_unique<QuadraticDragEffect>(p.quadratic_drag_per_m));
+  if (m.rolling_contact > 0) effects.push_back(std::make_unique<RollingContactEffect>(m.rolling_contact, p.friction_base,
+                                                                m.rolling.inertia_factor));
   return effects;
 }
 

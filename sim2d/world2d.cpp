@@ -148,6 +148,7 @@ std::unique_ptr<World2D> build_world2d(const CompiledScenario& sc, const BodyMod
     b2BodyDef bd;
     bd.type = b2_dynamicBody;
     bd.position = w->to_engine(seed.position);
+    bd.userData.pointer = static_cast<uintptr_t>(i + 1);  // particle id + 1 (0: not a particle)
     b2Body* body = w->world->CreateBody(&bd);
     b2CircleShape circle;
     circle.m_radius = static_cast<float>(r);

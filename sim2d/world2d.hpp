@@ -14,7 +14,8 @@
 
 namespace gapflow {
 
-// Fixture user data: what a fixture belongs to (for pair materials).
+// Fixture user data: what a fixture belongs to (for pair materials). A particle's body
+// carries its id + 1 as body user data (0 on every other body).
 enum class FixtureKind : uintptr_t { particle = 1, wall = 2 };
 
 // Per-particle constants the effects need (engine units).

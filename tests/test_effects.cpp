@@ -23,22 +23,7 @@ using gapflow::testing::compile_text;
 namespace {
 
 // One particle far from every wall, no settling; overrides "section.key=value".
-const char* kOneParticle = R"(
-[scenario]
-name = "effects single particle"
-[plane]
-length_mm = 3000.0
-width_mm = 600.0
-[bottleneck]
-gap_mm = 300.0
-[particles]
-count = 1
-diameter_mm = "medium"
-size_scatter = 0.0
-[release]
-barrier_mm = 1500.0
-settle_s = 0.0
-)";
+const std::string kOneParticle = gapflow::testing::open_board_scenario("effects single particle", 1);
 
 CompiledScenario one_particle(const std::vector<std::string>& overrides) { return compile_text(kOneParticle, overrides); }
 

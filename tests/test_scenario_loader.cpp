@@ -439,8 +439,9 @@ ScenarioDef all_fields_changed() {
   d.shaking.obstruction = {true, 1.0, -45.0, false, 0.25, 0.5, 0.1, 7.5};
   d.run = {gapflow::EndCondition::time_limit, 120.0, 400, 2.5, 10.0, 7, 1234567890123ull, 3};
   d.protocol = {gapflow::ClogBreaking::local_perturbation, true, 4.5};
-  d.model.box2d = {0.0004, 12, 4, true, true, 2.5, {false, 2.0 / 3.0}, {false, gapflow::BaseFrictionMethod::joint}};
+  d.model.box2d = {0.0004, 12, 4, true, true, 2.5, 0.0, {false, 2.0 / 3.0}, {false, gapflow::BaseFrictionMethod::joint}};
   d.model.bullet = {0.0005, 4, 50, true, 10.0, 3.5, 0.05};
+  // (model.box2d.rolling_contact needs rolling on: its round trip is in tests/test_rolling_contact.cpp)
   return d;
 }
 

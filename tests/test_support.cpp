@@ -12,6 +12,13 @@ std::filesystem::path source_path(const std::string& relative) {
   return std::filesystem::path(GAPFLOW_SOURCE_DIR) / relative;
 }
 
+std::string open_board_scenario(const std::string& name, int count, double incline_deg) {
+  return "[scenario]\nname = \"" + name + "\"\n[plane]\nincline_deg = " + std::to_string(incline_deg) +
+         "\nlength_mm = 3000.0\nwidth_mm = 600.0\n[bottleneck]\ngap_mm = 300.0\n[particles]\ncount = " +
+         std::to_string(count) +
+         "\ndiameter_mm = \"medium\"\nsize_scatter = 0.0\n[release]\nbarrier_mm = 1500.0\nsettle_s = 0.0\n";
+}
+
 CompiledScenario compile_text(const std::string& toml, const std::vector<std::string>& overrides) {
   LoadedScenario loaded = parse_scenario(toml, "test.toml", overrides);
   try {

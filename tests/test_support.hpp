@@ -16,6 +16,9 @@ std::filesystem::path source_path(const std::string& relative);
 
 // Parse and compile a scenario given as TOML text (throws on error).
 CompiledScenario compile_text(const std::string& toml, const std::vector<std::string>& overrides = {});
+// A board far larger than the particles (3000 x 600 mm, gap 300 mm, barrier at 1500 mm, no
+// settling, equal medium spheres), for tests that place particles by hand.
+std::string open_board_scenario(const std::string& name, int count, double incline_deg = 8.0);
 // Load and compile a shipped scenario file.
 CompiledScenario compile_file(const std::string& relative, const std::vector<std::string>& overrides = {});
 
