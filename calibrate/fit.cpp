@@ -227,21 +227,27 @@ ProfileInterval profile_interval(const DataFile& data, const Surface& s, const P
   return out;
 }
 
+std::vector<double> grid_levels(const FreeParameter& f, bool alone, int grid_max) {
+  int levels = 3;
+  double h = (f.hi - f.lo) / 2;
+  if (alone) {
+    levels = static_cast<int>(std::floor((f.hi - f.lo) / f.step + 1e-9)) + 1;
+    h = f.step;
+    if (levels > grid_max) levels = grid_max, h = (f.hi - f.lo) / (levels - 1);
+  }
+  std::vector<double> out;
+  for (int k = 0; k < levels; ++k) out.push_back(f.lo + k * h);
+  return out;
+}
+
 BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const Say& say) {
   BaselineFit out;
   // The grid.
   std::vector<ParameterSet> grid{ParameterSet{}};
   for (const FreeParameter& f : data.free) {
-    int levels = 3;
-    double h = (f.hi - f.lo) / 2;
-    if (data.free.size() == 1) {
-      levels = static_cast<int>(std::floor((f.hi - f.lo) / f.step + 1e-9)) + 1;
-      h = f.step;
-      if (levels > def.grid_max) levels = def.grid_max, h = (f.hi - f.lo) / (levels - 1);
-    }
     std::vector<ParameterSet> next;
     for (const ParameterSet& g : grid)
-      for (int k = 0; k < levels; ++k) next.push_back(g.with(f.key, f.lo + k * h));
+      for (double v : grid_levels(f, data.free.size() == 1, def.grid_max)) next.push_back(g.with(f.key, v));
     grid = next;
   }
   say(fmt::format("baseline: {} grid node(s) over the free parameters ({} runs)", grid.size(),

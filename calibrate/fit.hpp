@@ -65,6 +65,10 @@ struct BaselineFit {
   std::vector<Prediction> node_predictions;
 };
 
+// The baseline grid's values of one free parameter: alone, its step from lo (at most
+// grid_max levels, spread evenly if more would be needed); with others, lo, mid, hi.
+std::vector<double> grid_levels(const FreeParameter& f, bool alone, int grid_max);
+
 // Grid over the free parameters' ranges (one parameter: spacing `step`, at most
 // def.grid_max nodes; two or three: 3 levels each), all in one batch of runs (the
 // same nodes for every data file of this design, so calibrations sharing a store

@@ -2,6 +2,7 @@
 
 #include "calibrate/calibration.hpp"
 #include "calibrate/effect_catalogue.hpp"
+#include "calibrate/fit.hpp"
 #include "common/random.hpp"
 #include "common/statistics.hpp"
 #include "common/text_file.hpp"
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace gapflow {
@@ -82,11 +84,14 @@ double calibration_sigma(const DataFile& design, const TwinDef& def, const Predi
 
 // chi^2 over the fitted points between the twin's data and the model without the
 // planted effects, both on the twin's seeds (their difference is not the packing).
+// Infinite where the model without the effects gives no value at some point (a node
+// that cannot be compared, rather than a made-up penalty the refinement would bend to).
 double chi2_between(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without) {
   double chi2 = 0;
   for (std::size_t i = 0; i < design.points.size(); ++i) {
     if (design.points[i].held_out || !with.valid[i]) continue;
-    const double w = without.valid[i] ? (with.fit[i] - without.fit[i]) / calibration_sigma(design, def, with, i) : 10.0;
+    if (!without.valid[i]) return std::numeric_limits<double>::infinity();
+    const double w = (with.fit[i] - without.fit[i]) / calibration_sigma(design, def, with, i);
     chi2 += w * w;
   }
   return chi2;
@@ -104,12 +109,10 @@ PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const T
                                       [](const PlantedValue& v) { return v.name != "free"; });
   if (!any_effect) return sig;
   const ParameterSet without = without_planted_effects(design, truth);
-  std::vector<double> nodes;
   std::vector<ParameterSet> sets;
   if (design.free.size() == 1) {
-    const FreeParameter& f = design.free.front();
-    for (double v = f.lo; v <= f.hi + 1e-9 * f.step; v += f.step) nodes.push_back(v);
-    for (double v : nodes) sets.push_back(without.with(f.key, v));
+    const FreeParameter& f = design.free.front();  // the calibration's own grid (same job keys)
+    for (double v : grid_levels(f, true, CalibrationDef{}.grid_max)) sets.push_back(without.with(f.key, v));
   } else {
     sets.push_back(without);
   }
@@ -117,14 +120,18 @@ PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const T
   std::vector<double> chi2;
   for (const Prediction& q : p) chi2.push_back(chi2_between(design, def, with, q));
   const std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
+  if (!std::isfinite(chi2[best])) return sig;  // no node gives every point a value: nothing to compare
   sig.chi2 = chi2[best];
-  if (best > 0 && best + 1 < chi2.size()) {  // parabola through three equally spaced nodes
+  if (best > 0 && best + 1 < chi2.size() && std::isfinite(chi2[best - 1]) && std::isfinite(chi2[best + 1])) {
+    // parabola through three equally spaced nodes
     const double curvature = chi2[best - 1] - 2 * chi2[best] + chi2[best + 1];
     if (curvature > 0) sig.chi2 = std::max(0.0, chi2[best] - std::pow(chi2[best + 1] - chi2[best - 1], 2) / (8 * curvature));
   }
   for (std::size_t i = 0; i < design.points.size(); ++i) sig.points += !design.points[i].held_out && with.valid[i] ? 1 : 0;
   int candidates = 0;
   for (const EffectDef& e : effect_catalogue()) candidates += effect_applies(e, def.model, design) ? 1 : 0;
+  // Bonferroni over every applicable effect: the loop divides by the visible ones only,
+  // so this threshold is conservative (the power a lower bound).
   const double alpha = CalibrationDef{}.alpha / std::max(1, candidates);
   sig.known = true;
   sig.critical = chi_square_quantile(1 - alpha, 1);

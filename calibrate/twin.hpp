@@ -39,7 +39,7 @@ struct PlantedSignal {
   bool known = false;     // false: nothing planted (a null twin, or the other model's data as they are)
   double chi2 = 0;        // lambda = min over the free parameter of chi^2(data, model without the effects), fitted points
   int points = 0;         // fitted points
-  double critical = 0;    // the score test's threshold at the loop's Bonferroni level
+  double critical = 0;    // the score test's threshold, Bonferroni over every applicable effect (the loop: visible ones)
   double oracle_power = 0;// P(score > critical) for a score test that knew the planted signature
 };
 

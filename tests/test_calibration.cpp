@@ -104,7 +104,7 @@ TEST(Attribution, RivalsCoverThePlantedSignature) {
     picked += std::max_element(scores.begin(), scores.end()) == scores.begin() ? 1 : 0;
   }
   EXPECT_GT(covered, 0.9 * trials) << covered;
-  EXPECT_LT(picked, covered) << picked;
+  EXPECT_LT(picked, covered - trials / 10) << picked;  // the single pick misses several times as often
   std::cout << "planted signature among the rivals in " << covered << " of " << trials << ", best-scoring in " << picked
             << "\n";
 }
