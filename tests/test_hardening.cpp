@@ -224,6 +224,27 @@ TEST(Hardening, ExportRefusesNonRegularTargetsAndLeavesNoPartialFile) {
   EXPECT_FALSE(std::filesystem::exists(dir / "runs.csv.partial"));
 }
 
+// The views' outputs (--movie, --vtk, --snapshot-dir) are checked before the run like --out:
+// a device or FIFO is never replaced by a movie (as root, --movie /dev/null once did), and
+// a file named as a folder is neither written into nor replaced.
+TEST(Hardening, ViewOutputsRefuseTargetsThatAreNotTheirs) {
+  TempDir dir("hardening_views");
+  const std::filesystem::path fifo = dir / "pipe", file = dir / "notes.txt", folder = dir / "folder";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  write(file, "the user's notes");
+  std::filesystem::create_directories(folder);
+  const std::string run = "run " + kCylinder + " --set particles.count=20 --set run.time_limit_s=0.2 --quiet ";
+  expect_bad_input(run + "--movie " + shell_quoted(fifo.string()), "is a");
+  expect_bad_input(run + "--movie " + shell_quoted(folder.string()), "is a directory");
+  expect_bad_input(run + "--vtk " + shell_quoted(file.string()), "is not a folder");
+  expect_bad_input(run + "--snapshot-at 0 --snapshot-dir " + shell_quoted(file.string()), "is not a folder");
+  struct stat st {};
+  ASSERT_EQ(lstat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
+  EXPECT_EQ(read_text_file(file).value_or(""), "the user's notes");
+  EXPECT_FALSE(std::filesystem::exists(dir / "folder.partial"));
+}
+
 TEST(Hardening, AFailedWriteRemovesThePartialFile) {
   TempDir dir("hardening");
   EXPECT_THROW(write_file_atomically(dir / "x.csv", [](std::ostream&) { throw std::runtime_error("boom"); }),

@@ -1,5 +1,6 @@
 #include "view/run_outputs.hpp"
 
+#include "common/text_file.hpp"
 #include "view/movie.hpp"
 #include "view/vtk_series.hpp"
 
@@ -42,9 +43,26 @@ struct RunOutputs::Writers {
   std::vector<ParticleMotion> scratch;
 };
 
+namespace {
+
+// An output folder must be absent (it is made) or a folder: a file or device of the
+// user's named by mistake is refused before the run, never written into or replaced.
+void check_output_folder(const std::string& dir) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(dir, ec);
+  if (std::filesystem::exists(st) && !std::filesystem::is_directory(st))
+    throw FileError(dir, "is not a folder (output folders must be absent or folders)");
+}
+
+}  // namespace
+
 RunOutputs::RunOutputs(const CompiledScenario& sc, RunOutputDef def)
     : sc_(sc), def_(std::move(def)), w_(std::make_unique<Writers>()) {
   def_.validate();
+  // Every target checked before anything is drawn or simulated (exit 2, nothing written).
+  if (!def_.movie_path.empty()) check_output_file(def_.movie_path);  // absent or a regular file: /dev/null is not
+  if (!def_.snapshot_times_s.empty() || def_.snapshot_on_clog) check_output_folder(def_.snapshot_dir);
+  if (!def_.vtk_dir.empty()) check_output_folder(def_.vtk_dir);
   Writers& w = *w_;
   if (!def_.snapshot_times_s.empty() || !def_.movie_path.empty()) w.view = std::make_unique<TopView>(sc, def_.view);
   if (def_.snapshot_on_clog) {
