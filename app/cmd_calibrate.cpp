@@ -4,6 +4,7 @@
 #include "app/cli_errors.hpp"
 #include "calibrate/calibration_report.hpp"
 #include "calibrate/twin.hpp"
+#include "common/text_file.hpp"
 #include "studies/mpi_runner.hpp"
 
 #include <CLI/CLI.hpp>
@@ -55,6 +56,7 @@ int cmd_calibrate(const CalibrateCommands::Options& o) {
   const DataFile data = load_data_file(o.data_file);
   if (o.check) return print_data_check(data);
   const std::filesystem::path out = o.out.empty() ? std::filesystem::path("results/calibration") / data.name : std::filesystem::path(o.out);
+  check_output_folder(out);  // before an hour of runs, not after
   const std::filesystem::path db = o.db.empty() ? out / "runs.sqlite" : std::filesystem::path(o.db);
   CalibrationDef def;
   def.model = parse_model_kind(o.model);

@@ -114,4 +114,11 @@ std::optional<std::string> flush_stdout() {
   return errno ? std::string(std::strerror(errno)) : std::string("write error");
 }
 
+void check_output_folder(const fs::path& dir) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(dir, ec);
+  if (fs::exists(st) && !fs::is_directory(st))
+    throw FileError(dir, "is not a folder (output folders must be absent or folders)");
+}
+
 }  // namespace gapflow

@@ -43,6 +43,10 @@ std::optional<std::string> read_text_file(const std::filesystem::path& file);
 // and takes a new file. Call it before long work whose result goes there.
 void check_output_file(const std::filesystem::path& path);
 
+// Throws FileError unless `dir` can be an output folder: absent (it will be made) or a
+// folder; a file or device named by mistake is refused, never written into or replaced.
+void check_output_folder(const std::filesystem::path& dir);
+
 // Write to "<path>.partial" and rename when complete (see above). Write errors (a
 // full disk) throw std::runtime_error and leave neither the partial file nor a
 // changed target.

@@ -124,7 +124,7 @@ class StrictTable {
   }
   const toml::table* table(std::string_view key) {
     const toml::node* n = get(key);
-    if (n && !n->is_table()) fail(key, *n, "must be a table");
+    if (n && !n->is_table()) fail(key, *n, fmt::format("must be a table [{}]", dotted(key)));
     return n ? n->as_table() : nullptr;
   }
   const toml::array* array(std::string_view key, const char* of) {

@@ -257,6 +257,7 @@ ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::
 
   ReportOutcome o;
   o.out_dir = request.out ? *request.out : (db.has_parent_path() ? db.parent_path() : fs::path("."));
+  check_output_folder(o.out_dir);
   fs::create_directories(o.out_dir);
   o.n_points = data.points.size();
   o.n_runs = data.n_runs;

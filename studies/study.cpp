@@ -244,12 +244,6 @@ void read_study_section(StrictTable t, StudyDef& d) {
   d.set = read_set(t);
 }
 
-const toml::table* sub_table(StrictTable& root, std::string_view key) {
-  const toml::node* n = root.get(key);
-  if (n && !n->is_table()) root.fail(key, *n, fmt::format("must be a table [{}]", key));
-  return n ? n->as_table() : nullptr;
-}
-
 }  // namespace
 
 StudyDef parse_study(std::string_view text, std::string_view source_name, const std::filesystem::path& base_dir) {
@@ -257,7 +251,7 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
   toml::table doc = parse_toml_located(text, source);
   StudyDef d;
   StrictTable root(&doc, "", source, kRootKeys);
-  const toml::table* study = sub_table(root, "study");
+  const toml::table* study = root.table("study");
   if (!study) throw ScenarioError({source, 1, 1}, "study", "", "required: a [study] section with name");
   read_study_section(StrictTable(study, "study", source, kStudyKeys), d);
   std::set<std::string> labels;
@@ -269,16 +263,16 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
     d.series.push_back(std::move(s));
   }
   if (d.series.empty()) throw ScenarioError({source, 1, 1}, "series", "", "required: at least one [[series]]");
-  if (const toml::table* pm = sub_table(root, "per_model")) {
+  if (const toml::table* pm = root.table("per_model")) {
     StrictTable plans(pm, "per_model", source, kModelNames);
     for (const std::string& name : kModelNames)
-      if (const toml::table* t = sub_table(plans, name))
+      if (const toml::table* t = plans.table(name))
         d.per_model[parse_model_kind(name)] = read_plan(StrictTable(t, "per_model." + name, source, kPlanKeys));
   }
-  if (const toml::table* q = sub_table(root, "quick")) d.quick = read_quick(StrictTable(q, "quick", source, kQuickKeys));
-  if (const toml::table* c = sub_table(root, "confirm"))
+  if (const toml::table* q = root.table("quick")) d.quick = read_quick(StrictTable(q, "quick", source, kQuickKeys));
+  if (const toml::table* c = root.table("confirm"))
     d.confirm = read_confirm(StrictTable(c, "confirm", source, kConfirmKeys));
-  if (const toml::table* r = sub_table(root, "report")) {
+  if (const toml::table* r = root.table("report")) {
     StrictTable rt(r, "report", source, kReportKeys);
     d.report = read_report(rt);
     if (!d.report.baseline.empty() && !labels.count(d.report.baseline))

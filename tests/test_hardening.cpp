@@ -224,10 +224,10 @@ TEST(Hardening, ExportRefusesNonRegularTargetsAndLeavesNoPartialFile) {
   EXPECT_FALSE(std::filesystem::exists(dir / "runs.csv.partial"));
 }
 
-// The views' outputs (--movie, --vtk, --snapshot-dir) are checked before the run like --out:
+// The views' outputs (--movie, --vtk, --snapshot-dir) and calibrate --out are checked before the run like --out:
 // a device or FIFO is never replaced by a movie (as root, --movie /dev/null once did), and
 // a file named as a folder is neither written into nor replaced.
-TEST(Hardening, ViewOutputsRefuseTargetsThatAreNotTheirs) {
+TEST(Hardening, OutputTargetsThatAreNotOursAreRefusedBeforeTheWork) {
   TempDir dir("hardening_views");
   const std::filesystem::path fifo = dir / "pipe", file = dir / "notes.txt", folder = dir / "folder";
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
@@ -238,6 +238,9 @@ TEST(Hardening, ViewOutputsRefuseTargetsThatAreNotTheirs) {
   expect_bad_input(run + "--movie " + shell_quoted(folder.string()), "is a directory");
   expect_bad_input(run + "--vtk " + shell_quoted(file.string()), "is not a folder");
   expect_bad_input(run + "--snapshot-at 0 --snapshot-dir " + shell_quoted(file.string()), "is not a folder");
+  // The same rule for the folders of a calibration and a report, checked before the work.
+  const std::string design = shell_quoted(source_path("data/examples/tiny_design.toml").string());
+  expect_bad_input("calibrate " + design + " --no-plots --out " + shell_quoted(file.string()), "is not a folder");
   struct stat st {};
   ASSERT_EQ(lstat(fifo.c_str(), &st), 0);
   EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";

@@ -43,19 +43,6 @@ struct RunOutputs::Writers {
   std::vector<ParticleMotion> scratch;
 };
 
-namespace {
-
-// An output folder must be absent (it is made) or a folder: a file or device of the
-// user's named by mistake is refused before the run, never written into or replaced.
-void check_output_folder(const std::string& dir) {
-  std::error_code ec;
-  const auto st = std::filesystem::status(dir, ec);
-  if (std::filesystem::exists(st) && !std::filesystem::is_directory(st))
-    throw FileError(dir, "is not a folder (output folders must be absent or folders)");
-}
-
-}  // namespace
-
 RunOutputs::RunOutputs(const CompiledScenario& sc, RunOutputDef def)
     : sc_(sc), def_(std::move(def)), w_(std::make_unique<Writers>()) {
   def_.validate();
