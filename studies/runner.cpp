@@ -96,6 +96,11 @@ std::vector<const Job*> jobs_to_run(const std::vector<Job>& jobs, const Store& s
   std::vector<const Job*> todo;
   for (const Job& j : jobs)
     if (!stored.count(j.id.key)) todo.push_back(&j);
+  // Longest expected jobs first (LPT): a long 3D or large run started last would leave the
+  // other workers idle at the end. Only the order changes, never a result (a job's seed and
+  // scenario are in its key).
+  std::stable_sort(todo.begin(), todo.end(),
+                   [](const Job* a, const Job* b) { return a->expected_cost > b->expected_cost; });
   summary.already_stored = summary.total - static_cast<int>(todo.size());
   return todo;
 }
