@@ -432,6 +432,11 @@ void add_particles(World3D& w, const CompiledScenario& sc) {
                                                  w.scale.to_engine_length(seed.position.y), r));
     auto body = std::make_unique<btRigidBody>(ci);
     w.tag(*body, Surface3D::particle, static_cast<int>(i));
+    // A sphere's inertia is isotropic, so its gyroscopic torque w x (I w) is exactly zero.
+    // Bullet's default implicit gyroscopic step (btRigidBody's BT_ENABLE_GYROSCOPIC_FORCE_
+    // IMPLICIT_BODY) would only add round-off (w is rotated into the body frame and back)
+    // for a 3x3 solve per sphere and step.
+    body->setFlags(body->getFlags() & ~BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY);
     if (w.sleeping) {
       body->setSleepingThresholds(lin, lin / r);  // scaled to the grain: ~1 % of sqrt(g d)
     } else {
