@@ -9,6 +9,7 @@
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
+#include <BulletCollision/CollisionDispatch/btSimulationIslandManager.h>
 
 #include <algorithm>
 #include <cmath>
@@ -331,6 +332,12 @@ void configure_world(World3D& w, const CompiledScenario& sc) {
   info.m_restitutionVelocityThreshold = 0.05 * v_ref;
   // Split impulse (on by default) resolves penetration deeper than this without adding energy.
   info.m_splitImpulsePenetrationThreshold = -0.04 * d_e;
+  // Islands only serve sleeping: Bullet puts an island to sleep as a whole and skips
+  // it. With sleeping off no body can sleep (every sphere and kinematic wall is
+  // DISABLE_DEACTIVATION, static bodies are never solved), so every island would be
+  // solved anyway: one group of all contacts spares sorting the manifolds by island
+  // every step (btSimulationIslandManager::processIslands).
+  w.world.getSimulationIslandManager()->setSplitIslands(w.sleeping);
 }
 
 void add_static(World3D& w, PlacedShape placed, Surface3D kind) {
