@@ -6,6 +6,7 @@
 #include "sim3d/session3d.hpp"
 
 #include "sim3d/model3d.hpp"
+#include "sim3d/solver3d.hpp"
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
@@ -43,7 +44,8 @@ struct MaterialTable {
   double rolling_resistance = 0;// dimensionless, board only; rolling friction = this * sphere radius
   double spinning = 0;          // engine length, every pair
   // Bullet only builds the spinning constraint when the rolling value is > 0;
-  // this keeps it on when spinning friction is set but rolling resistance is 0.
+  // this keeps it on when spinning friction is set but rolling resistance is 0
+  // (Solver3D then drops the two rolling rows capped at this floor).
   double rolling_floor = 0;     // engine length
 };
 
@@ -267,7 +269,7 @@ struct Session3D::World {
   btDefaultCollisionConfiguration config;
   btCollisionDispatcher dispatcher{&config};
   btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
+  bullet3d::Solver3D solver;  // Bullet's solver without the rolling rows that cannot act
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
 
   std::vector<std::unique_ptr<btCollisionShape>> static_shapes;
@@ -310,6 +312,8 @@ void configure_world(World3D& w, const CompiledScenario& sc) {
   w.nominal_d = sc.nominal_diameter;
   w.sleeping = b.sleeping;
   w.materials = make_materials(sc.def.particles, w.scale);
+  // Rolling rows capped at the floor exist only so that Bullet builds the spinning row.
+  w.solver.set_negligible_cap(btScalar(w.materials.rolling_floor));
 
   // Tilted gravity, axis-aligned geometry: Froude scaling keeps g = 9.81 engine units.
   const double g = w.scale.to_engine_acceleration(kStandardGravity);
@@ -525,6 +529,7 @@ void Session3D::set_shake_targets(const ShakeOffsets& offsets_at_end_of_step) {
 void Session3D::step() {
   World& w = *w_;
   const ShakeOffsets& to = w.target;
+  w.solver.reset_counts();
   for (int s = 1; s <= w.substeps; ++s) {
     const double f = static_cast<double>(s) / w.substeps;
     // Stage 1: where the kinematic bodies must be at the end of this substep.
@@ -683,6 +688,28 @@ Vec2 Session3D::obstruction_offset() const {
   const KinematicBody& k = w_->obstruction;
   const btVector3 d = k.body->getWorldTransform().getOrigin() - k.rest.getOrigin();
   return {w_->scale.to_lab_length(d.x()), w_->scale.to_lab_length(d.y())};
+}
+
+SolverSetup3D Session3D::solver_setup() const {
+  const World& w = *w_;
+  SolverSetup3D out;
+  out.split_islands = const_cast<btDiscreteDynamicsWorld&>(w.world).getSimulationIslandManager()->getSplitIslands();
+  const btCollisionObjectArray& objects = w.world.getCollisionObjectArray();
+  for (int i = 0; i < objects.size(); ++i) {
+    const btCollisionObject* o = objects[i];
+    if (!o->isStaticObject() && o->getActivationState() != DISABLE_DEACTIVATION) ++out.bodies_that_may_sleep;
+  }
+  constexpr int gyroscopic = BT_ENABLE_GYROSCOPIC_FORCE_EXPLICIT | BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_WORLD |
+                             BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY;
+  for (const auto& p : w.particles)
+    if (p && (p->getFlags() & gyroscopic)) ++out.gyroscopic_spheres;
+  out.rolling_rows = w.solver.rolling_rows();
+  out.dropped_rolling_rows = w.solver.dropped_rows();
+  return out;
+}
+
+void Session3D::keep_idle_rolling_rows(bool keep) {
+  w_->solver.set_negligible_cap(keep ? btScalar(-1) : btScalar(w_->materials.rolling_floor));
 }
 
 std::unique_ptr<EngineSession> make_session_3d(const CompiledScenario& scenario) {

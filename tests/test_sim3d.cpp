@@ -284,6 +284,74 @@ TEST(Sim3D, SmallDischargeConservesParticles) {
   EXPECT_EQ(r.end_reason, EndReason::all_passed);
 }
 
+// Islands only serve sleeping: with sleeping off no body may sleep (also after
+// retiring and re-injecting), so the session solves all contacts as one group.
+TEST(Sim3D, IslandsAreSplitOnlyWhenBodiesMaySleep) {
+  const CompiledScenario sc = compile_text(small_discharge_toml(40, 1.0));
+  Session3D s(sc);
+  EXPECT_FALSE(s.solver_setup().split_islands);
+  EXPECT_EQ(s.solver_setup().bodies_that_may_sleep, 0);
+  EXPECT_EQ(s.solver_setup().gyroscopic_spheres, 0);  // isotropic spheres: no gyroscopic term
+  const RunRecord r = run_simulation(sc, s);
+  ASSERT_GT(r.passed, 5);
+  std::vector<ActiveParticle> left;
+  s.active_particles(left);
+  ASSERT_FALSE(left.empty());
+  s.reinject({{left.front().id, {0.0, 0.2}}});
+  EXPECT_EQ(s.solver_setup().bodies_that_may_sleep, 0);
+
+  const CompiledScenario sleepy = compile_text(small_discharge_toml(40, 1.0), {"model.bullet.sleeping=true"});
+  Session3D t(sleepy);
+  EXPECT_TRUE(t.solver_setup().split_islands);
+  EXPECT_EQ(t.solver_setup().bodies_that_may_sleep, 40);
+}
+
+// Rolling rows per board contact (Bullet builds spinning + 2 rolling when the pair's
+// rolling value is > 0); Solver3D leaves out the ones capped at zero or the floor.
+struct RowCase {
+  const char* rolling;
+  const char* spinning_mm;
+  int solved, dropped;  // per board contact
+};
+
+TEST(Sim3D, RollingRowsThatCannotActAreLeftOut) {
+  const RowCase cases[] = {{"0.0", "0.0", 0, 0}, {"0.02", "0.0", 2, 1}, {"0.0", "0.1", 1, 2}, {"0.02", "0.1", 3, 0}};
+  for (const RowCase& k : cases) {
+    SCOPED_TRACE(std::string(k.rolling) + " " + k.spinning_mm);
+    const CompiledScenario sc = one_sphere({"particles.count=2", "plane.incline_deg=0.0",
+                                            std::string("particles.rolling_resistance=") + k.rolling,
+                                            std::string("particles.spinning_friction_mm=") + k.spinning_mm});
+    Session3D s(sc);
+    const double r = s.radius(0);
+    s.place(0, {-0.05, 0.3, r});  // two board contacts, nothing else
+    s.place(1, {0.05, 0.3, r});
+    s.step();
+    s.step();
+    EXPECT_EQ(s.solver_setup().rolling_rows, 2 * k.solved);
+    EXPECT_EQ(s.solver_setup().dropped_rolling_rows, 2 * k.dropped);
+  }
+}
+
+// Leaving those rows out changes nothing: a discharge with rolling resistance
+// gives the same crossings, to the bit, with and without them.
+TEST(Sim3D, LeavingOutIdleRollingRowsKeepsTheRunBitForBit) {
+  const CompiledScenario sc =
+      compile_text(small_discharge_toml(40, 1.0), {"particles.rolling_resistance=0.02"});
+  auto run = [&](bool keep) {
+    Session3D s(sc);
+    s.keep_idle_rolling_rows(keep);
+    return run_simulation(sc, s);
+  };
+  const RunRecord lean = run(false), full = run(true);
+  ASSERT_GT(lean.crossings.size(), 5u);
+  ASSERT_EQ(lean.crossings.size(), full.crossings.size());
+  for (size_t i = 0; i < lean.crossings.size(); ++i) {
+    EXPECT_EQ(lean.crossings[i].id, full.crossings[i].id);
+    EXPECT_EQ(lean.crossings[i].t, full.crossings[i].t);
+    EXPECT_EQ(lean.crossings[i].x, full.crossings[i].x);
+  }
+}
+
 // Shaken walls are exactly at the commanded offset after each step, and the
 // release barrier comes and goes.
 void check_kinematics(int substeps) {
