@@ -6,6 +6,7 @@
 #include "sim3d/session3d.hpp"
 
 #include "sim3d/model3d.hpp"
+#include "sim3d/far_pairs.hpp"
 #include "sim3d/solver3d.hpp"
 
 #include <btBulletDynamicsCommon.h>
@@ -267,7 +268,7 @@ struct Session3D::World {
 
   // Bullet objects; the world must be destroyed after every body is removed (see ~World).
   btDefaultCollisionConfiguration config;
-  btCollisionDispatcher dispatcher{&config};
+  bullet3d::Dispatcher3D dispatcher{&config};  // skips the narrow phase of pairs certainly apart
   btDbvtBroadphase broadphase;
   bullet3d::Solver3D solver;  // Bullet's solver without the rolling rows that cannot act
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
@@ -530,6 +531,7 @@ void Session3D::step() {
   World& w = *w_;
   const ShakeOffsets& to = w.target;
   w.solver.reset_counts();
+  w.dispatcher.reset_counts();
   for (int s = 1; s <= w.substeps; ++s) {
     const double f = static_cast<double>(s) / w.substeps;
     // Stage 1: where the kinematic bodies must be at the end of this substep.
@@ -655,7 +657,7 @@ PairMaterial3D Session3D::pair_material(Surface3D other, int a, int b) const {
 std::vector<ContactInfo3D> Session3D::contacts() const {
   std::vector<ContactInfo3D> out;
   const EngineScaling& s = w_->scale;
-  btDispatcher& d = const_cast<btCollisionDispatcher&>(w_->dispatcher);
+  btDispatcher& d = const_cast<bullet3d::Dispatcher3D&>(w_->dispatcher);
   for (int m = 0; m < d.getNumManifolds(); ++m) {
     const btPersistentManifold* man = d.getManifoldByIndexInternal(m);
     const btCollisionObject* a = man->getBody0();
@@ -705,11 +707,13 @@ SolverSetup3D Session3D::solver_setup() const {
     if (p && (p->getFlags() & gyroscopic)) ++out.gyroscopic_spheres;
   out.rolling_rows = w.solver.rolling_rows();
   out.dropped_rolling_rows = w.solver.dropped_rows();
+  out.skipped_far_pairs = static_cast<int>(w.dispatcher.skipped_pairs());
   return out;
 }
 
-void Session3D::keep_idle_rolling_rows(bool keep) {
-  w_->solver.set_negligible_cap(keep ? btScalar(-1) : btScalar(w_->materials.rolling_floor));
+void Session3D::set_shortcuts(const Shortcuts3D& s) {
+  w_->solver.set_negligible_cap(s.drop_idle_rolling_rows ? btScalar(w_->materials.rolling_floor) : btScalar(-1));
+  w_->dispatcher.set_skip_far_pairs(s.skip_far_sphere_box_pairs);
 }
 
 std::unique_ptr<EngineSession> make_session_3d(const CompiledScenario& scenario) {

@@ -332,17 +332,17 @@ TEST(Sim3D, RollingRowsThatCannotActAreLeftOut) {
   }
 }
 
-// Leaving those rows out changes nothing: a discharge with rolling resistance
-// gives the same crossings, to the bit, with and without them.
-TEST(Sim3D, LeavingOutIdleRollingRowsKeepsTheRunBitForBit) {
+// The shortcuts change nothing: a discharge with rolling resistance gives the
+// same crossings, to the bit, with each of them and with none.
+void check_same_run_without(Shortcuts3D off) {
   const CompiledScenario sc =
       compile_text(small_discharge_toml(40, 1.0), {"particles.rolling_resistance=0.02"});
-  auto run = [&](bool keep) {
+  auto run = [&](const Shortcuts3D& shortcuts) {
     Session3D s(sc);
-    s.keep_idle_rolling_rows(keep);
+    s.set_shortcuts(shortcuts);
     return run_simulation(sc, s);
   };
-  const RunRecord lean = run(false), full = run(true);
+  const RunRecord lean = run({}), full = run(off);
   ASSERT_GT(lean.crossings.size(), 5u);
   ASSERT_EQ(lean.crossings.size(), full.crossings.size());
   for (size_t i = 0; i < lean.crossings.size(); ++i) {
@@ -350,6 +350,26 @@ TEST(Sim3D, LeavingOutIdleRollingRowsKeepsTheRunBitForBit) {
     EXPECT_EQ(lean.crossings[i].t, full.crossings[i].t);
     EXPECT_EQ(lean.crossings[i].x, full.crossings[i].x);
   }
+}
+
+TEST(Sim3D, ShortcutsKeepTheRunBitForBit) {
+  check_same_run_without({.drop_idle_rolling_rows = false, .skip_far_sphere_box_pairs = true});
+  check_same_run_without({.drop_idle_rolling_rows = true, .skip_far_sphere_box_pairs = false});
+  check_same_run_without({.drop_idle_rolling_rows = false, .skip_far_sphere_box_pairs = false});
+}
+
+// A sphere far from the funnel walls but inside their bounding boxes is not
+// handed to GJK; one touching a wall is.
+TEST(Sim3D, FarSphereBoxPairsSkipTheNarrowPhase) {
+  const CompiledScenario sc = compile_text(small_discharge_toml(40, 1.0));
+  Session3D s(sc);
+  for (int i = 0; i < 50; ++i) s.step();
+  EXPECT_GT(s.solver_setup().skipped_far_pairs, 0);
+  Shortcuts3D off;
+  off.skip_far_sphere_box_pairs = false;
+  s.set_shortcuts(off);
+  s.step();
+  EXPECT_EQ(s.solver_setup().skipped_far_pairs, 0);
 }
 
 // Shaken walls are exactly at the commanded offset after each step, and the
