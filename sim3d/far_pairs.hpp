@@ -5,7 +5,7 @@
 // by 30° (the funnel) has a bounding box over most of the funnel, so nearly every
 // sphere there is paired with it and Bullet runs GJK (btConvexConvexAlgorithm,
 // there is no sphere-box algorithm in the default configuration) every step,
-// although ~85 % of these calls find no contact (measured on the paper's
+// although ~80 % of these calls find no contact (measured on the paper's
 // discharge). GJK adds a contact point only when the sphere's centre is closer
 // than radius + box margin + the manifold's breaking threshold to the box's core
 // (the box shrunk by its margin), which is farther than the outer box: a centre
