@@ -14,6 +14,7 @@ packages=(
   slurm-wlm munge              # scripts/slurm_local.sh: a one-node Slurm for the slow cluster test
   libcairo2-dev ffmpeg libcpp-httplib-dev   # view/ (snapshots, movies) and gapflow serve
   python3-vtk9 python3-pil chromium         # tests: ParaView files read back by VTK; the live view in headless Chromium
+  valgrind                                  # scripts/profile_3d_settings.sh (instructions per particle-step)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -6,9 +6,12 @@
 #include "sim3d/session3d.hpp"
 
 #include "sim3d/model3d.hpp"
+#include "sim3d/far_pairs.hpp"
+#include "sim3d/solver3d.hpp"
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
+#include <BulletCollision/CollisionDispatch/btSimulationIslandManager.h>
 
 #include <algorithm>
 #include <cmath>
@@ -42,7 +45,8 @@ struct MaterialTable {
   double rolling_resistance = 0;// dimensionless, board only; rolling friction = this * sphere radius
   double spinning = 0;          // engine length, every pair
   // Bullet only builds the spinning constraint when the rolling value is > 0;
-  // this keeps it on when spinning friction is set but rolling resistance is 0.
+  // this keeps it on when spinning friction is set but rolling resistance is 0
+  // (Solver3D then drops the two rolling rows capped at this floor).
   double rolling_floor = 0;     // engine length
 };
 
@@ -264,9 +268,9 @@ struct Session3D::World {
 
   // Bullet objects; the world must be destroyed after every body is removed (see ~World).
   btDefaultCollisionConfiguration config;
-  btCollisionDispatcher dispatcher{&config};
+  bullet3d::Dispatcher3D dispatcher{&config};  // skips the narrow phase of pairs certainly apart
   btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
+  bullet3d::Solver3D solver;  // Bullet's solver without the rolling rows that cannot act
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
 
   std::vector<std::unique_ptr<btCollisionShape>> static_shapes;
@@ -309,6 +313,8 @@ void configure_world(World3D& w, const CompiledScenario& sc) {
   w.nominal_d = sc.nominal_diameter;
   w.sleeping = b.sleeping;
   w.materials = make_materials(sc.def.particles, w.scale);
+  // Rolling rows capped at the floor exist only so that Bullet builds the spinning row.
+  w.solver.set_negligible_cap(btScalar(w.materials.rolling_floor));
 
   // Tilted gravity, axis-aligned geometry: Froude scaling keeps g = 9.81 engine units.
   const double g = w.scale.to_engine_acceleration(kStandardGravity);
@@ -331,6 +337,12 @@ void configure_world(World3D& w, const CompiledScenario& sc) {
   info.m_restitutionVelocityThreshold = 0.05 * v_ref;
   // Split impulse (on by default) resolves penetration deeper than this without adding energy.
   info.m_splitImpulsePenetrationThreshold = -0.04 * d_e;
+  // Islands only serve sleeping: Bullet puts an island to sleep as a whole and skips
+  // it. With sleeping off no body can sleep (every sphere and kinematic wall is
+  // DISABLE_DEACTIVATION, static bodies are never solved), so every island would be
+  // solved anyway: one group of all contacts spares sorting the manifolds by island
+  // every step (btSimulationIslandManager::processIslands).
+  w.world.getSimulationIslandManager()->setSplitIslands(w.sleeping);
 }
 
 void add_static(World3D& w, PlacedShape placed, Surface3D kind) {
@@ -432,6 +444,11 @@ void add_particles(World3D& w, const CompiledScenario& sc) {
                                                  w.scale.to_engine_length(seed.position.y), r));
     auto body = std::make_unique<btRigidBody>(ci);
     w.tag(*body, Surface3D::particle, static_cast<int>(i));
+    // A sphere's inertia is isotropic, so its gyroscopic torque w x (I w) is exactly zero.
+    // Bullet's default implicit gyroscopic step (btRigidBody's BT_ENABLE_GYROSCOPIC_FORCE_
+    // IMPLICIT_BODY) would only add round-off (w is rotated into the body frame and back)
+    // for a 3x3 solve per sphere and step.
+    body->setFlags(body->getFlags() & ~BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY);
     if (w.sleeping) {
       body->setSleepingThresholds(lin, lin / r);  // scaled to the grain: ~1 % of sqrt(g d)
     } else {
@@ -513,6 +530,8 @@ void Session3D::set_shake_targets(const ShakeOffsets& offsets_at_end_of_step) {
 void Session3D::step() {
   World& w = *w_;
   const ShakeOffsets& to = w.target;
+  w.solver.reset_counts();
+  w.dispatcher.reset_counts();
   for (int s = 1; s <= w.substeps; ++s) {
     const double f = static_cast<double>(s) / w.substeps;
     // Stage 1: where the kinematic bodies must be at the end of this substep.
@@ -638,7 +657,7 @@ PairMaterial3D Session3D::pair_material(Surface3D other, int a, int b) const {
 std::vector<ContactInfo3D> Session3D::contacts() const {
   std::vector<ContactInfo3D> out;
   const EngineScaling& s = w_->scale;
-  btDispatcher& d = const_cast<btCollisionDispatcher&>(w_->dispatcher);
+  btDispatcher& d = const_cast<bullet3d::Dispatcher3D&>(w_->dispatcher);
   for (int m = 0; m < d.getNumManifolds(); ++m) {
     const btPersistentManifold* man = d.getManifoldByIndexInternal(m);
     const btCollisionObject* a = man->getBody0();
@@ -671,6 +690,30 @@ Vec2 Session3D::obstruction_offset() const {
   const KinematicBody& k = w_->obstruction;
   const btVector3 d = k.body->getWorldTransform().getOrigin() - k.rest.getOrigin();
   return {w_->scale.to_lab_length(d.x()), w_->scale.to_lab_length(d.y())};
+}
+
+SolverSetup3D Session3D::solver_setup() const {
+  const World& w = *w_;
+  SolverSetup3D out;
+  out.split_islands = const_cast<btDiscreteDynamicsWorld&>(w.world).getSimulationIslandManager()->getSplitIslands();
+  const btCollisionObjectArray& objects = w.world.getCollisionObjectArray();
+  for (int i = 0; i < objects.size(); ++i) {
+    const btCollisionObject* o = objects[i];
+    if (!o->isStaticObject() && o->getActivationState() != DISABLE_DEACTIVATION) ++out.bodies_that_may_sleep;
+  }
+  constexpr int gyroscopic = BT_ENABLE_GYROSCOPIC_FORCE_EXPLICIT | BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_WORLD |
+                             BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY;
+  for (const auto& p : w.particles)
+    if (p && (p->getFlags() & gyroscopic)) ++out.gyroscopic_spheres;
+  out.rolling_rows = w.solver.rolling_rows();
+  out.dropped_rolling_rows = w.solver.dropped_rows();
+  out.skipped_far_pairs = static_cast<int>(w.dispatcher.skipped_pairs());
+  return out;
+}
+
+void Session3D::set_shortcuts(const Shortcuts3D& s) {
+  w_->solver.set_negligible_cap(s.drop_idle_rolling_rows ? btScalar(w_->materials.rolling_floor) : btScalar(-1));
+  w_->dispatcher.set_skip_far_pairs(s.skip_far_sphere_box_pairs);
 }
 
 std::unique_ptr<EngineSession> make_session_3d(const CompiledScenario& scenario) {

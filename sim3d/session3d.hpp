@@ -35,6 +35,23 @@ struct PairMaterial3D {
   double spinning_friction = 0;// m: torsional torque cap / normal force
 };
 
+// How the session set Bullet's solver up, and the rows of its last solve (for tests).
+struct SolverSetup3D {
+  bool split_islands = true;      // islands solved separately (only sleeping needs it)
+  int bodies_that_may_sleep = 0;  // dynamic and kinematic bodies whose deactivation is not disabled
+  int gyroscopic_spheres = 0;     // spheres with one of Bullet's gyroscopic flags
+  int rolling_rows = 0;           // rolling and spinning rows solved in the last step()
+  int dropped_rolling_rows = 0;   // rows capped at zero (or the rolling floor) left out in the last step()
+  int skipped_far_pairs = 0;      // sphere-box narrow phases skipped in the last step() (certainly apart)
+};
+
+// Shortcuts that must leave a run the same bit for bit (on by default; tests turn
+// them off to check exactly that).
+struct Shortcuts3D {
+  bool drop_idle_rolling_rows = true;     // rolling/spinning rows capped at zero (Solver3D)
+  bool skip_far_sphere_box_pairs = true;  // narrow phase of a sphere and a box certainly apart (Dispatcher3D)
+};
+
 // One contact point as the solver sees it (for tests and diagnostics).
 struct ContactInfo3D {
   Surface3D a = Surface3D::particle, b = Surface3D::particle;  // a is always a particle
@@ -81,6 +98,8 @@ class Session3D final : public EngineSession {
   // Kinematic body positions (m, plane frame offset from rest) for tests of shaking.
   Vec2 bottleneck_offset(bool right) const;
   Vec2 obstruction_offset() const;
+  SolverSetup3D solver_setup() const;
+  void set_shortcuts(const Shortcuts3D& shortcuts);  // tests only
   double time() const;  // s (lab) simulated so far by step()
 
   struct World;  // opaque: the Bullet objects (session3d.cpp)

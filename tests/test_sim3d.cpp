@@ -237,13 +237,8 @@ std::string small_discharge_toml(int count, double time_limit_s) {
          "[run]\ntime_limit_s = " + std::to_string(time_limit_s) + "\nstop_after_no_flow_s = 5.0\n";
 }
 
-TEST(Sim3D, RunsAreDeterministic) {
-  const CompiledScenario sc = compile_text(small_discharge_toml(40, 1.5));
-  auto run = [&] {
-    Session3D s(sc);
-    return run_simulation(sc, s);
-  };
-  const RunRecord a = run(), b = run();
+// Same crossings to the bit (who, when, where), and enough of them to mean something.
+void expect_same_crossings(const RunRecord& a, const RunRecord& b) {
   ASSERT_GT(a.crossings.size(), 5u);
   ASSERT_EQ(a.crossings.size(), b.crossings.size());
   for (size_t i = 0; i < a.crossings.size(); ++i) {
@@ -251,6 +246,15 @@ TEST(Sim3D, RunsAreDeterministic) {
     EXPECT_EQ(a.crossings[i].t, b.crossings[i].t);
     EXPECT_EQ(a.crossings[i].x, b.crossings[i].x);
   }
+}
+
+TEST(Sim3D, RunsAreDeterministic) {
+  const CompiledScenario sc = compile_text(small_discharge_toml(40, 1.5));
+  auto run = [&] {
+    Session3D s(sc);
+    return run_simulation(sc, s);
+  };
+  expect_same_crossings(run(), run());
 }
 
 // The app runs replicates on worker threads: sessions must not share state
@@ -282,6 +286,87 @@ TEST(Sim3D, SmallDischargeConservesParticles) {
   EXPECT_EQ(r.max_conservation_error, 0);
   EXPECT_EQ(r.passed, 150);
   EXPECT_EQ(r.end_reason, EndReason::all_passed);
+}
+
+// Islands only serve sleeping: with sleeping off no body may sleep (also after
+// retiring and re-injecting), so the session solves all contacts as one group.
+TEST(Sim3D, IslandsAreSplitOnlyWhenBodiesMaySleep) {
+  const CompiledScenario sc = compile_text(small_discharge_toml(40, 1.0));
+  Session3D s(sc);
+  EXPECT_FALSE(s.solver_setup().split_islands);
+  EXPECT_EQ(s.solver_setup().bodies_that_may_sleep, 0);
+  EXPECT_EQ(s.solver_setup().gyroscopic_spheres, 0);  // isotropic spheres: no gyroscopic term
+  const RunRecord r = run_simulation(sc, s);
+  ASSERT_GT(r.passed, 5);
+  std::vector<ActiveParticle> left;
+  s.active_particles(left);
+  ASSERT_FALSE(left.empty());
+  s.reinject({{left.front().id, {0.0, 0.2}}});
+  EXPECT_EQ(s.solver_setup().bodies_that_may_sleep, 0);
+
+  const CompiledScenario sleepy = compile_text(small_discharge_toml(40, 1.0), {"model.bullet.sleeping=true"});
+  Session3D t(sleepy);
+  EXPECT_TRUE(t.solver_setup().split_islands);
+  EXPECT_EQ(t.solver_setup().bodies_that_may_sleep, 40);
+}
+
+// Rolling rows per board contact (Bullet builds spinning + 2 rolling when the pair's
+// rolling value is > 0); Solver3D leaves out the ones capped at zero or the floor.
+struct RowCase {
+  const char* rolling;
+  const char* spinning_mm;
+  int solved, dropped;  // per board contact
+};
+
+TEST(Sim3D, RollingRowsThatCannotActAreLeftOut) {
+  const RowCase cases[] = {{"0.0", "0.0", 0, 0}, {"0.02", "0.0", 2, 1}, {"0.0", "0.1", 1, 2}, {"0.02", "0.1", 3, 0}};
+  for (const RowCase& k : cases) {
+    SCOPED_TRACE(std::string(k.rolling) + " " + k.spinning_mm);
+    const CompiledScenario sc = one_sphere({"particles.count=2", "plane.incline_deg=0.0",
+                                            std::string("particles.rolling_resistance=") + k.rolling,
+                                            std::string("particles.spinning_friction_mm=") + k.spinning_mm});
+    Session3D s(sc);
+    const double r = s.radius(0);
+    s.place(0, {-0.05, 0.3, r});  // two board contacts, nothing else
+    s.place(1, {0.05, 0.3, r});
+    s.step();
+    s.step();
+    EXPECT_EQ(s.solver_setup().rolling_rows, 2 * k.solved);
+    EXPECT_EQ(s.solver_setup().dropped_rolling_rows, 2 * k.dropped);
+  }
+}
+
+// The shortcuts change nothing: a discharge with rolling resistance gives the
+// same crossings, to the bit, with each of them and with none.
+void check_same_run_without(Shortcuts3D off) {
+  const CompiledScenario sc =
+      compile_text(small_discharge_toml(40, 1.0), {"particles.rolling_resistance=0.02"});
+  auto run = [&](const Shortcuts3D& shortcuts) {
+    Session3D s(sc);
+    s.set_shortcuts(shortcuts);
+    return run_simulation(sc, s);
+  };
+  expect_same_crossings(run({}), run(off));
+}
+
+TEST(Sim3D, ShortcutsKeepTheRunBitForBit) {
+  check_same_run_without({.drop_idle_rolling_rows = false, .skip_far_sphere_box_pairs = true});
+  check_same_run_without({.drop_idle_rolling_rows = true, .skip_far_sphere_box_pairs = false});
+  check_same_run_without({.drop_idle_rolling_rows = false, .skip_far_sphere_box_pairs = false});
+}
+
+// A sphere far from the funnel walls but inside their bounding boxes is not
+// handed to GJK; one touching a wall is.
+TEST(Sim3D, FarSphereBoxPairsSkipTheNarrowPhase) {
+  const CompiledScenario sc = compile_text(small_discharge_toml(40, 1.0));
+  Session3D s(sc);
+  for (int i = 0; i < 50; ++i) s.step();
+  EXPECT_GT(s.solver_setup().skipped_far_pairs, 0);
+  Shortcuts3D off;
+  off.skip_far_sphere_box_pairs = false;
+  s.set_shortcuts(off);
+  s.step();
+  EXPECT_EQ(s.solver_setup().skipped_far_pairs, 0);
 }
 
 // Shaken walls are exactly at the commanded offset after each step, and the
