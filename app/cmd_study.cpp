@@ -170,7 +170,7 @@ int cmd_study(const StudyCommands::Options& o) {
   }
   std::cerr << fmt::format("study '{}'{}{}: {} jobs on {}, store {}\n", study.name, o.quick ? " (quick)" : "",
                            shard ? fmt::format(" share {} ({} jobs in all)", shard->label(), all_jobs.size()) : "",
-                           jobs.size(),
+                           study.screen ? std::string("round-by-round") : std::to_string(jobs.size()),
                            mpi ? fmt::format("{} MPI ranks", mpi->size() - 1) : fmt::format("{} worker threads", o.jobs),
                            db.string());
   RunnerOptions options;

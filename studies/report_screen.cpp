@@ -75,7 +75,7 @@ std::string map_text(const CellResult& c) {
   switch (c.state) {
     case HeatCell::State::infeasible: return "n/f";
     case HeatCell::State::missing: return "?";
-    case HeatCell::State::dropped: return fmt::format("<{:.2f} r{}", c.last.upper, c.dropped_round + 1);
+    case HeatCell::State::dropped: return fmt::format("<{:.3g} r{}", c.last.upper, c.dropped_round + 1);
     case HeatCell::State::final: break;
   }
   if (!c.final.ratio.valid) return "?";
@@ -210,7 +210,7 @@ std::vector<std::string> draw_maps(const ScreenGrid& grid, const std::vector<Cel
       for (double x : xs) m.xs.push_back(fmt::format("{:.3g}", x));
       for (double y : ys) m.ys.push_back(fmt::format("{:.3g}", y));
       m.legend = "* interval above 1 (95 %), ** also Bonferroni over survivors, - below 1; <u rN: dropped after "
-                 "round N, upper bound u; n/f: does not fit";
+                 "round N (upper bound u), n/f: does not fit, ?: not decided yet";
       for (const CellResult& c : cells) {
         if (c.cell->series != shape || c.cell->gap != gap.gap) continue;
         HeatCell h;

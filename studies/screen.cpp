@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <ostream>
+#include <set>
 #include <stdexcept>
 
 namespace gapflow {
@@ -134,9 +135,14 @@ void print_round(std::ostream& log, const RacingParams& p, const RaceState& s, i
                      per_decision_alpha(p, n_cells), kept, dropped);
 }
 
-void add_summary(RunnerSummary& total, const RunnerSummary& step) {
-  total.total += step.total;
-  total.already_stored += step.already_stored;
+// Counts jobs once, though each round lists the earlier rounds' replicates again (resume).
+void add_summary(RunnerSummary& total, const RunnerSummary& step, const std::vector<Job>& jobs,
+                 const std::set<std::string>& stored_before, std::set<std::string>& listed) {
+  for (const Job& j : jobs)
+    if (listed.insert(j.id.key).second) {
+      total.total += 1;
+      total.already_stored += stored_before.count(j.id.key) ? 1 : 0;
+    }
   total.done_now += step.done_now;
   total.failed.insert(total.failed.end(), step.failed.begin(), step.failed.end());
   total.cancelled = step.cancelled;
@@ -153,6 +159,8 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
                      study.name, grid.cells.size(), grid.cells.size() - grid.raced.size(), grid.baselines.size(),
                      race_rounds(p), p.initial, p.step, p.max, p.confirm);
   RunnerSummary total;
+  const std::set<std::string> stored_before = store.keys();
+  std::set<std::string> listed;
   int printed = 0;
   for (int stage = 0; stage <= race_rounds(p) + 1; ++stage) {
     const RaceState state = replay_race(p, screen_race_input(study, grid, store.load(study.name)));
@@ -163,7 +171,7 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
       log << fmt::format("screen confirmation: {} jobs (fresh replicates {} to {})\n", jobs.size(), p.max,
                          p.max + p.confirm - 1);
     const RunnerSummary step = run(jobs, store, options);
-    add_summary(total, step);
+    add_summary(total, step, jobs, stored_before, listed);
     if (step.cancelled || !step.failed.empty() || confirming) return total;
   }
   throw std::runtime_error("the screen made no progress: a round's runs are stored but the race cannot decide it");

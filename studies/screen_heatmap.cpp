@@ -10,7 +10,7 @@ namespace gapflow {
 
 namespace {
 
-constexpr double kCell = 64, kMarginLeft = 70, kMarginTop = 56, kGapBetween = 80, kMarginBottom = 70;
+constexpr double kCell = 72, kMarginLeft = 70, kMarginTop = 56, kGapBetween = 80, kMarginBottom = 70;
 
 struct Rgb {
   double r, g, b;
@@ -88,8 +88,8 @@ void panel(cairo_t* cr, const HeatMap& m, double x0, bool side) {
 
 void draw_heatmap_png(const HeatMap& m, const std::filesystem::path& file) {
   const double panel_w = kCell * static_cast<double>(std::max<std::size_t>(1, m.xs.size()));
-  const int width = static_cast<int>(kMarginLeft + 2 * panel_w + kGapBetween + 20);
-  const int height = static_cast<int>(kMarginTop + kCell * static_cast<double>(m.ys.size()) + kMarginBottom);
+  const int width = std::max(640, static_cast<int>(kMarginLeft + 2 * panel_w + kGapBetween + 20));
+  const int height = static_cast<int>(kMarginTop + kCell * static_cast<double>(m.ys.size()) + kMarginBottom + 14);
   cairo_surface_t* surface = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, width, height);
   cairo_t* cr = cairo_create(surface);
   cairo_set_source_rgb(cr, 1, 1, 1);
@@ -103,7 +103,9 @@ void draw_heatmap_png(const HeatMap& m, const std::filesystem::path& file) {
   cairo_rotate(cr, -M_PI / 2);
   text_at(cr, m.ylabel, 0, 0, 12);
   cairo_restore(cr);
-  text_at(cr, m.legend, width / 2.0, height - 12, 10);
+  const std::size_t split = m.legend.find("; ");  // two lines: the legend is wider than a small map
+  text_at(cr, m.legend.substr(0, split), width / 2.0, height - 26, 10);
+  if (split != std::string::npos) text_at(cr, m.legend.substr(split + 2), width / 2.0, height - 12, 10);
   cairo_destroy(cr);
   const cairo_status_t status = cairo_surface_write_to_png(surface, file.c_str());
   cairo_surface_destroy(surface);

@@ -257,13 +257,13 @@ void expect_bad(const std::string& screen_body, const std::string& where, const 
 
 TEST(ScreenStudy, BadKeysExitTwoWithLocation) {
   const std::string grid = "distance_d = [1, 2]\ngap_d = [4]\n";
-  expect_bad("shapes = [\"cylinder\"]\ncylinder_diameter_d = [2, -1]\n" + grid, "6:31", "screen.cylinder_diameter_d");
-  expect_bad("shapes = [\"square\"]\n", "5:11", "screen.shapes");
-  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\ndistance_d = [1]\ndistance_mm = [5]\ngap_d = [4]\n", "8:1",
+  expect_bad("shapes = [\"cylinder\"]\ncylinder_diameter_d = [2, -1]\n" + grid, "7:27", "screen.cylinder_diameter_d");
+  expect_bad("shapes = [\"square\"]\n", "6:11", "screen.shapes");
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\ndistance_d = [1]\ndistance_mm = [5]\ngap_d = [4]\n", "9:15",
              "screen.distance_mm");
-  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "initail = 3\n", "9:1", "screen.initail");
-  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "initial = 4\nmax = 3\n", "10:7", "screen.max");
-  expect_bad("shapes = [\"A\"]\ncylinder_diameter_d = [2]\ntriangle_side_d = [2]\n" + grid, "6:1",
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "initail = 3\n", "10:11", "screen.initail");
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "initial = 4\nmax = 3\n", "11:7", "screen.max");
+  expect_bad("shapes = [\"A\"]\ncylinder_diameter_d = [2]\ntriangle_side_d = [2]\n" + grid, "7:23",
              "screen.cylinder_diameter_d");
   expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid,
              "4:1", "series", "[[series]]\nlabel = \"x\"\nscenario = \"x.toml\"\n");
