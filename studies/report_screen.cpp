@@ -62,7 +62,8 @@ std::string fate_text(const CellResult& c, const RacingParams& p) {
                          c.dropped_round + 1, c.last.n, c.last.ratio, c.last.upper, c.last.reason);
     case HeatCell::State::final: break;
   }
-  if (!c.final.ratio.valid) return fmt::format("survivor: confirmation incomplete ({} of {} runs)", 0, p.confirm);
+  if (!c.final.ratio.valid)
+    return fmt::format("survivor: its {} confirmation runs (or its baseline's) are not all stored yet", p.confirm);
   const char* verdict = c.final.simultaneous_above ? "above J_0 (also simultaneously)"
                         : c.final.above            ? "above J_0"
                         : c.final.below            ? "below J_0"

@@ -127,7 +127,9 @@ TEST(Racing, PerCellScopeKeepsGoodCellsAndCovers) {
     EXPECT_NEAR(o.coverage, p.confidence, 0.025);
     // Most cells clearly below J_0: the race spends fewer runs than a fixed grid of `confirm` per
     // cell. (With many cells near 1 it spends more: survivors pay screening + confirmation.)
-    if (truth == &kMostlyLow) EXPECT_LT(o.race_runs, o.fixed_runs);
+    if (truth == &kMostlyLow) {
+      EXPECT_LT(o.race_runs, o.fixed_runs);
+    }
   }
 }
 
@@ -240,6 +242,11 @@ TEST(ScreenStudy, TinyMapRunsDecidesResumesAndReports) {
   EXPECT_EQ(csv.rfind("round,cell,n,ratio,lower,upper,best_lower,decision\n", 0), 0u) << csv;
   EXPECT_NE(csv.find("\n1,\"cylinder size 2 d, D 1 d, W 4 d\",2,"), std::string::npos) << csv;
   EXPECT_TRUE(std::filesystem::exists(dir / "report" / "screen_map_cylinder_W4d.png")) << md;
+  // One worker instead of two, another store: the same decisions (they never depend on timing).
+  const std::string db1 = shell_quoted((dir / "s1.sqlite").string()), out1 = shell_quoted((dir / "r1").string());
+  ASSERT_EQ(run_gapflow("study " + study + " --db " + db1 + " --jobs 1", 300).code, 0);
+  ASSERT_EQ(run_gapflow("report " + db1 + " --out " + out1 + " --no-snapshots --no-plots", 120).code, 0);
+  EXPECT_EQ(read_all(dir / "r1" / "decisions.csv"), csv);
 }
 
 // A bad [screen] key: exit 2, file:line:column, the key.
