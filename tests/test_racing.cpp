@@ -7,9 +7,13 @@
 //     and writes its report; bad [screen] keys exit 2 with file:line:column.
 #include "studies/racing.hpp"
 
+#include "common/simulation.hpp"
+#include "studies/screen.hpp"
+
 #include "common/random.hpp"
 #include "test_support.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -247,6 +251,70 @@ TEST(ScreenStudy, TinyMapRunsDecidesResumesAndReports) {
   ASSERT_EQ(run_gapflow("study " + study + " --db " + db1 + " --jobs 1", 300).code, 0);
   ASSERT_EQ(run_gapflow("report " + db1 + " --out " + out1 + " --no-snapshots --no-plots", 120).code, 0);
   EXPECT_EQ(read_all(dir / "r1" / "decisions.csv"), csv);
+}
+
+// The driver without simulation: each job returns J = (1 - 0.1 x point) x 100 + noise seeded by
+// its key. Interrupted after 9 runs (mid-round 1), then resumed: the same decisions and runs as
+// a screen run in one go.
+RunRecord fake_run(const Job& job) {
+  RunRecord r;
+  r.model = job.id.model;
+  r.replicate = job.id.replicate;
+  r.particles = r.passed = 60;
+  r.diameter_m = 0.00775;  // m
+  r.gap_m = 0.031;         // m
+  r.sim_time_s = r.wall_time_s = 1;
+  r.end_reason = EndReason::all_passed;
+  const double mean = job.id.series == "none" ? 100 : 100 * (1 - 0.1 * job.id.point);
+  RandomStream rs(std::stoull(job.id.key, nullptr, 16));
+  r.j_paper = mean + 5 * rs.normal();
+  return r;
+}
+
+std::string decisions_of(const StudyDef& study, Store& store) {
+  const ScreenGrid grid = screen_grid(study);
+  const RaceState s = replay_race(study.screen->racing, screen_race_input(study, grid, store.load(study.name)));
+  std::string out;
+  for (const RaceDecision& d : s.decisions) out += fmt::format("{} {} {} {:.9g}\n", d.round, d.cell, d.dropped, d.upper);
+  return out;
+}
+
+TEST(ScreenStudy, DriverResumesMidRoundWithTheSameDecisions) {
+  TempDir dir("screen-driver");
+  const StudyDef study = load_study(source_path("studies/examples/tiny_screen.toml"));
+  std::ostringstream log;
+  Store straight(dir / "straight.sqlite");
+  RunnerOptions options;
+  options.workers = 2;
+  options.run = [](const Job& j, const std::atomic<bool>*) { return fake_run(j); };
+  const RunnerSummary all = run_screen(study, straight, options, run_jobs, log);
+  ASSERT_TRUE(all.failed.empty()) << all.failed.front().error;
+  EXPECT_FALSE(all.cancelled);
+  EXPECT_EQ(all.total, all.done_now);
+
+  Store resumed(dir / "resumed.sqlite");
+  std::atomic<bool> cancel{false};
+  std::atomic<int> calls{0};
+  options.workers = 1;
+  options.cancel = &cancel;
+  options.run = [&](const Job& j, const std::atomic<bool>*) {
+    if (++calls > 9) {
+      cancel = true;
+      throw RunCancelled();
+    }
+    return fake_run(j);
+  };
+  const RunnerSummary first = run_screen(study, resumed, options, run_jobs, log);
+  EXPECT_TRUE(first.cancelled);
+  EXPECT_EQ(resumed.count(), 9u);
+  cancel = false;
+  options.run = [](const Job& j, const std::atomic<bool>*) { return fake_run(j); };
+  const RunnerSummary second = run_screen(study, resumed, options, run_jobs, log);
+  EXPECT_FALSE(second.cancelled);
+  EXPECT_EQ(second.already_stored, 9);
+  EXPECT_EQ(resumed.keys(), straight.keys());
+  EXPECT_EQ(decisions_of(study, resumed), decisions_of(study, straight));
+  EXPECT_NE(decisions_of(study, straight).find(" 1 "), std::string::npos) << "some cell must be dropped";
 }
 
 // A bad [screen] key: exit 2, file:line:column, the key.
