@@ -114,7 +114,7 @@ void read_screen(const toml::table& root, const toml::table& screen, const std::
                           "not allowed beside [screen]: the screen makes its own series from its grid "
                           "(and its confirmation is its final round)");
   if (study.models.size() != 1)
-    t.missing("scenario", "a screen runs one model: give [study] models = [\"2d\"] (or [\"3d\"])");
+    throw ScenarioError(t.here(), "study.models", "", "a [screen] runs one model: [\"2d\"] or [\"3d\"]");
   ScreenDef s;
   auto scenario = t.text("scenario", true);
   if (!scenario) t.missing("scenario", "required: the base scenario file, relative to the study file");
