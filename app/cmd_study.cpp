@@ -8,6 +8,7 @@
 #include "studies/confirm.hpp"
 #include "studies/mpi_runner.hpp"
 #include "studies/runner.hpp"
+#include "studies/screen.hpp"
 #include "studies/shard.hpp"
 #include "studies/store.hpp"
 #include "studies/study.hpp"
@@ -110,6 +111,26 @@ RunnerSummary run_confirm_stage(const StudyDef& study, Store& store, const Runne
   return screen;
 }
 
+// A [screen] study decides its jobs round by round (studies/screen.hpp): it has no fixed job
+// list to shard, plan or list; --dry-run prints its grid and its largest possible cost.
+int screen_dry_run_or_refuse(const StudyCommands::Options& o, const StudyDef& study) {
+  if (!o.shard.empty() || o.plan || o.status)
+    throw ScenarioError({o.study_file, 0, 0}, "", "",
+                        "a [screen] study decides its jobs round by round: --shard, --plan and --status do not "
+                        "apply (run it whole, or under --mpi)");
+  if (!o.dry_run) return -1;
+  const ScreenGrid g = screen_grid(study);
+  const RacingParams& p = study.screen->racing;
+  const std::size_t raced = g.raced.size(), gaps = g.baselines.size();
+  std::cout << fmt::format("screen '{}': {} cells, {} feasible, {} gaps; {} rounds ({} to {} replicates), {} "
+                           "confirmation replicates\nat most {} runs (no cell dropped); a fixed grid at the final "
+                           "confidence: {} runs\n",
+                           study.name, g.cells.size(), raced, gaps, race_rounds(p), p.initial, p.max, p.confirm,
+                           (raced + gaps) * static_cast<std::size_t>(p.max + p.confirm),
+                           (raced + gaps) * static_cast<std::size_t>(p.confirm));
+  return 0;
+}
+
 int cmd_study(const StudyCommands::Options& o) {
   // MPI first: every rank reads the study (a bad one fails on all ranks alike); rank 0 runs it.
   std::unique_ptr<MpiSession> mpi = o.mpi ? std::make_unique<MpiSession>() : nullptr;
@@ -119,8 +140,10 @@ int cmd_study(const StudyCommands::Options& o) {
                         "this study has no [quick] table, so no quick variant: run it without --quick, "
                         "or add [quick] with replicates / models / thin");
   if (o.quick) study = apply_quick(std::move(study));
+  if (study.screen)
+    if (const int rc = screen_dry_run_or_refuse(o, study); rc >= 0) return rc;
   const std::optional<ShardSpec> shard = o.shard.empty() ? std::nullopt : std::optional(parse_shard(o.shard));
-  const std::vector<Job> all_jobs = expand_jobs(study);  // every scenario validated before anything runs
+  const std::vector<Job> all_jobs = study.screen ? std::vector<Job>{} : expand_jobs(study);  // every scenario validated before anything runs
   const std::vector<Job> jobs = shard ? jobs_of_shard(all_jobs, *shard) : all_jobs;
   const std::filesystem::path db = db_path(o, study, shard);
   if (o.plan) {
@@ -147,7 +170,7 @@ int cmd_study(const StudyCommands::Options& o) {
   }
   std::cerr << fmt::format("study '{}'{}{}: {} jobs on {}, store {}\n", study.name, o.quick ? " (quick)" : "",
                            shard ? fmt::format(" share {} ({} jobs in all)", shard->label(), all_jobs.size()) : "",
-                           jobs.size(),
+                           study.screen ? std::string("round-by-round") : std::to_string(jobs.size()),
                            mpi ? fmt::format("{} MPI ranks", mpi->size() - 1) : fmt::format("{} worker threads", o.jobs),
                            db.string());
   RunnerOptions options;
@@ -159,7 +182,7 @@ int cmd_study(const StudyCommands::Options& o) {
     return mpi->run_jobs(j, s, op);
   })
                             : JobRunner(run_jobs);
-  RunnerSummary s = run(jobs, store, options);
+  RunnerSummary s = study.screen ? run_screen(study, store, options, run, std::cerr) : run(jobs, store, options);
   const bool confirm = !s.cancelled && s.failed.empty() && study.confirm.enabled;
   if (confirm && shard)  // the ranking needs every share's screen: it runs after the merge
     std::cerr << fmt::format("[confirm] runs once the shares are merged: gapflow study {} --db MERGED.sqlite\n",

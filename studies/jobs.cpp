@@ -37,19 +37,22 @@ struct Point {
   std::vector<std::size_t> value_of_axis;
 };
 
+// The i-th point of a series' grid.
+Point grid_point(const SeriesDef& s, std::size_t i) {
+  Point p{static_cast<int>(i), std::vector<std::size_t>(s.axes.size())};
+  std::size_t rest = i;
+  for (std::size_t k = s.axes.size(); k-- > 0;) {  // last axis varies fastest
+    p.value_of_axis[k] = rest % s.axes[k].values.size();
+    rest /= s.axes[k].values.size();
+  }
+  return p;
+}
+
 std::vector<Point> grid_points(const SeriesDef& s) {
   std::size_t n = 1;
   for (const SweepAxis& a : s.axes) n *= a.values.size();
   std::vector<Point> out;
-  for (std::size_t i = 0; i < n; ++i) {
-    Point p{static_cast<int>(i), std::vector<std::size_t>(s.axes.size())};
-    std::size_t rest = i;
-    for (std::size_t k = s.axes.size(); k-- > 0;) {  // last axis varies fastest
-      p.value_of_axis[k] = rest % s.axes[k].values.size();
-      rest /= s.axes[k].values.size();
-    }
-    out.push_back(std::move(p));
-  }
+  for (std::size_t i = 0; i < n; ++i) out.push_back(grid_point(s, i));
   return out;
 }
 
@@ -167,6 +170,16 @@ void check_unique(std::map<std::string, std::size_t>& first_of_key, const std::v
 }
 
 }  // namespace
+
+std::vector<Job> point_jobs(const StudyDef& study, const SeriesDef& series, int point, ModelKind model, int first,
+                            int last) {
+  const Point p = grid_point(series, static_cast<std::size_t>(point));
+  const std::string text = read_scenario_text(series);
+  const PointSpec spec = point_spec(study, series, p);
+  std::vector<Job> out;
+  for (int r = first; r < last; ++r) out.push_back(make_job(study, series, text, p, spec, model, r));
+  return out;
+}
 
 double count_jobs(const StudyDef& study) {
   double total = 0;  // a double cannot overflow here: every factor is bounded by the loader

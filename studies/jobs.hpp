@@ -53,6 +53,11 @@ std::string job_key(std::uint64_t scenario_hash, ModelKind kind);
 // overrides (else in the scenario file), naming the series and the point.
 std::vector<Job> expand_jobs(const StudyDef& study);
 
+// The jobs of one point of one series for replicates [first, last), with expand_jobs' keys:
+// what an adaptive study adds round by round (studies/screen.cpp). Throws like expand_jobs.
+std::vector<Job> point_jobs(const StudyDef& study, const SeriesDef& series, int point, ModelKind model, int first,
+                            int last);
+
 // How many jobs expand_jobs would make (with the [confirm] stage's), computed without
 // making them; expand_jobs refuses more than kMaxStudyJobs (common/input_bounds.hpp).
 double count_jobs(const StudyDef& study);

@@ -138,6 +138,8 @@ StudyInfo parse_study_info(std::string_view text, std::string_view source_name) 
     if (!r->is_table()) throw ScenarioError(where_of(source, *r), "report", node_text(*r), "must be a table [report]");
     info.report = read_report_table(*r->as_table(), source);
   }
+  info.screen = doc.contains("screen");
+  if (info.screen && info.report.baseline.empty()) info.report.baseline = kScreenBaseline;  // its baselines' series
   return info;
 }
 

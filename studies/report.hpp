@@ -24,6 +24,7 @@
 #include "common/fits.hpp"
 #include "studies/analysis.hpp"
 #include "studies/store.hpp"
+#include "studies/study.hpp"
 
 #include <filesystem>
 #include <iosfwd>
@@ -60,6 +61,7 @@ struct StudyInfo {
   std::vector<std::string> models;        // as written ("2d", "3d")
   std::vector<std::string> series_order;  // labels in file order
   ReportOptions report;
+  bool screen = false;  // the file has a [screen] table: the report adds the screen's map (studies/report_screen.cpp)
 };
 StudyInfo read_study_info(const std::filesystem::path& file);
 StudyInfo parse_study_info(std::string_view text, std::string_view source_name);
@@ -306,6 +308,16 @@ ExperimentSection clogging_section(const ReportData& data, const ReportOptions& 
 ExperimentSection models_section(const ReportData& data, const ReportOptions& opt);
 // screen_confirm: the models comparison read as "did the 3D confirmation keep the 2D screen's ranking".
 ExperimentSection screen_confirm_section(const ReportData& data, const ReportOptions& opt);
+// A [screen] study's section: the racing decisions, the final J/J_0 on confirmation runs only,
+// the budget against a fixed grid, and one heat map per gap (Cairo PNGs written to out_dir).
+ExperimentSection screen_section(const StudyDef& study, const std::vector<StoredRun>& runs,
+                                 const std::filesystem::path& out_dir, bool plots);
+struct ReportRequest;
+// The same from the report's request: the study file given, else the one recorded in the store;
+// a section saying why when the grid cannot be rebuilt (e.g. scenario paths that do not resolve).
+ExperimentSection screen_report_section(const ReportRequest& request, const std::filesystem::path& db,
+                                        const std::vector<StoredRun>& runs, const std::filesystem::path& out_dir,
+                                        std::ostream& log);
 // One section per opt.kinds entry, in order.
 std::vector<ExperimentSection> experiment_sections(const ReportData& data, const ReportOptions& opt);
 

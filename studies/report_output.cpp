@@ -271,6 +271,7 @@ ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::
   out << fmt::format("study '{}': {} runs, {} points\n\n", data.study.name, data.n_runs, data.points.size());
   for (const TextTable& t : md.tables) out << render_text(t) << "\n";
   md.experiments = experiment_sections(data, opt);
+  if (data.study.screen) md.experiments.push_back(screen_report_section(request, db, runs, o.out_dir, log));
   for (const ExperimentSection& e : md.experiments) print_experiment(out, e);
 
   md.figures = all_figures(data, md.experiments);

@@ -239,6 +239,13 @@ std::map<std::string, Job> jobs_by_key(const StudyDef& study, const std::vector<
   auto add = [&](std::vector<Job> jobs) {
     for (Job& j : jobs) out.emplace(j.id.key, std::move(j));
   };
+  if (study.screen) {  // its grid has cells that do not fit and its replicates vary: the stored runs' jobs
+    for (const StoredRun& r : runs)
+      for (const SeriesDef& s : study.series)
+        if (s.label == r.id.series && r.id.model == to_string(study.models.at(0)))
+          add(point_jobs(study, s, r.id.point, study.models.at(0), r.id.replicate, r.id.replicate + 1));
+    return out;
+  }
   add(expand_jobs(study));
   if (study.quick.present) add(expand_jobs(apply_quick(study)));
   if (study.confirm.enabled) add(confirm_jobs(study, rank_screened_points(study, runs)));

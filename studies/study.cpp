@@ -8,6 +8,7 @@
 #include "common/text_file.hpp"
 #include "common/toml_parse.hpp"
 #include "common/toml_strict.hpp"
+#include "studies/screen_loader.hpp"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -23,7 +24,7 @@ namespace gapflow {
 namespace {
 
 // The keys each table allows.
-const std::vector<std::string> kRootKeys{"study", "series", "per_model", "quick", "confirm", "report"};
+const std::vector<std::string> kRootKeys{"study", "series", "per_model", "quick", "confirm", "report", "screen"};
 const std::vector<std::string> kStudyKeys{"name", "description", "replicates", "models", "seed", "set"};
 const std::vector<std::string> kSeriesKeys{"label", "scenario", "set", "sweep"};
 const std::vector<std::string> kSweepKeys{"key", "values", "from", "to", "step"};
@@ -261,6 +262,10 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
       throw ScenarioError(location_of(source, *t->get("label")), "series.label", "\"" + s.label + "\"",
                           "must be unique in the study");
     d.series.push_back(std::move(s));
+  }
+  if (const toml::table* sc = root.table("screen")) {
+    read_screen(doc, *sc, source, base_dir, d);
+    for (const SeriesDef& s : d.series) labels.insert(s.label);
   }
   if (d.series.empty()) throw ScenarioError({source, 1, 1}, "series", "", "required: at least one [[series]]");
   if (const toml::table* pm = root.table("per_model")) {

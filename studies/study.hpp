@@ -12,10 +12,12 @@
 //   [quick]     replicates, models, thin  (what --quick changes)
 //   [confirm]   model, top, replicates, rank_by, set  (screen -> confirm)
 //   [report]    kind (string or list), baseline, j
+//   [screen]    a racing screen over shape x size x D x W instead of [[series]] (studies/screen_def.hpp)
 #pragma once
 
 #include "models/registry.hpp"
 #include "common/scenario_loader.hpp"
+#include "studies/screen_def.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -100,6 +102,7 @@ struct StudyDef {
   QuickDef quick;
   ConfirmDef confirm;
   ReportDef report;
+  std::optional<ScreenDef> screen;  // [screen]: series made from its grid, run round by round (studies/screen.hpp)
 };
 
 // Load and validate a study file. Scenario files and keys are checked later,

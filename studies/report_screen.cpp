@@ -1,0 +1,303 @@
+// The report of a [screen] study: the race replayed from the store (studies/screen.hpp),
+// the final J/J_0 of every survivor on its confirmation runs only, the budget against a
+// fixed grid, decisions.csv (every decision) and one heat map per shape and gap.
+#include "studies/report.hpp"
+
+#include "common/text_file.hpp"
+#include "studies/report_snapshots.hpp"
+#include "studies/screen.hpp"
+#include "studies/screen_heatmap.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <ostream>
+
+namespace gapflow {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using RunsByPoint = std::map<std::pair<std::string, int>, std::vector<const StoredRun*>>;
+
+// What the report says about one cell.
+struct CellResult {
+  const ScreenCell* cell = nullptr;
+  HeatCell::State state = HeatCell::State::missing;
+  int dropped_round = -1;       // 0-based
+  RaceDecision last;            // its last decision (dropped: the one that dropped it)
+  FinalEstimate final;          // survivors: confirmation runs only
+  double clogs_per_100 = -1;    // on the runs the shown J/J_0 comes from
+  int runs = 0;                 // stored runs of the cell
+  double wall_s = 0;            // their wall time (each run is single-threaded: CPU-seconds)
+};
+
+// Clogs per 100 particles passed over the replicates [from, to) of one point.
+double clog_rate(const std::vector<const StoredRun*>& runs, int from, int to) {
+  double clogs = 0, passed = 0;
+  for (const StoredRun* r : runs)
+    if (r->id.replicate >= from && r->id.replicate < to) {
+      clogs += static_cast<double>(r->record.clogs.size());
+      passed += r->record.passed;
+    }
+  return passed > 0 ? 100 * clogs / passed : -1;
+}
+
+void add_wall(CellResult& c, const std::vector<const StoredRun*>& runs) {
+  for (const StoredRun* r : runs) {
+    c.runs += 1;
+    c.wall_s += r->record.wall_time_s;
+  }
+}
+
+std::string fate_text(const CellResult& c, const RacingParams& p) {
+  switch (c.state) {
+    case HeatCell::State::infeasible: return "infeasible";
+    case HeatCell::State::missing: return "not decided yet";
+    case HeatCell::State::dropped:
+      return fmt::format("dropped after round {} (n = {}): J/J_0 {:.3f}, upper bound {:.3f} ({})",
+                         c.dropped_round + 1, c.last.n, c.last.ratio, c.last.upper, c.last.reason);
+    case HeatCell::State::final: break;
+  }
+  if (!c.final.ratio.valid)
+    return fmt::format("survivor: its {} confirmation runs (or its baseline's) are not all stored yet", p.confirm);
+  const char* verdict = c.final.simultaneous_above ? "above J_0 (also simultaneously)"
+                        : c.final.above            ? "above J_0"
+                        : c.final.below            ? "below J_0"
+                                                   : "not distinguishable from J_0";
+  return fmt::format("survivor: J/J_0 {:.3f} [{:.3f}, {:.3f}], {}", c.final.ratio.ratio, c.final.ratio.lo,
+                     c.final.ratio.hi, verdict);
+}
+
+std::string map_text(const CellResult& c) {
+  switch (c.state) {
+    case HeatCell::State::infeasible: return "n/f";
+    case HeatCell::State::missing: return "?";
+    case HeatCell::State::dropped: return fmt::format("<{:.3g} r{}", c.last.upper, c.dropped_round + 1);
+    case HeatCell::State::final: break;
+  }
+  if (!c.final.ratio.valid) return "?";
+  const char* mark = c.final.simultaneous_above ? "**" : c.final.above ? "*" : c.final.below ? " -" : "";
+  return fmt::format("{:.2f}{}", c.final.ratio.ratio, mark);
+}
+
+std::vector<CellResult> cell_results(const StudyDef& study, const ScreenGrid& grid, const RaceInput& in,
+                                     const RaceState& state, const RunsByPoint& runs) {
+  const RacingParams& p = study.screen->racing;
+  std::size_t survivors = 0;
+  for (std::size_t k = 0; k < in.cells.size(); ++k) survivors += state.alive(static_cast<int>(k)) ? 1 : 0;
+  std::map<int, RaceDecision> last;  // raced index -> its last decision
+  for (const RaceDecision& d : state.decisions) last[d.cell] = d;
+  std::vector<CellResult> out(grid.cells.size());
+  for (std::size_t i = 0; i < grid.cells.size(); ++i) {
+    out[i].cell = &grid.cells[i];
+    out[i].state = grid.cells[i].feasible ? HeatCell::State::missing : HeatCell::State::infeasible;
+    auto it = runs.find({grid.cells[i].series, grid.cells[i].point});
+    if (it != runs.end()) add_wall(out[i], it->second);
+  }
+  for (std::size_t k = 0; k < grid.raced.size(); ++k) {
+    CellResult& c = out[static_cast<std::size_t>(grid.raced[k])];
+    const auto it = runs.find({c.cell->series, c.cell->point});
+    const std::vector<const StoredRun*> none;
+    const auto& cell_runs = it != runs.end() ? it->second : none;
+    if (last.count(static_cast<int>(k))) c.last = last[static_cast<int>(k)];
+    c.dropped_round = state.dropped_after[k];
+    if (c.dropped_round >= 0) {
+      c.state = HeatCell::State::dropped;
+      c.clogs_per_100 = clog_rate(cell_runs, 0, c.last.n);
+    } else if (state.screening_done(p)) {
+      c.state = HeatCell::State::final;
+      c.final = final_estimate(p, in, static_cast<int>(k), survivors);
+      c.clogs_per_100 = clog_rate(cell_runs, p.max, p.max + p.confirm);
+    }
+  }
+  return out;
+}
+
+// decisions.csv: every decision of every round.
+void write_decisions_csv(const fs::path& file, const RaceInput& in, const RaceState& state) {
+  write_file_atomically(file, [&](std::ostream& s) {
+    s << "round,cell,n,ratio,lower,upper,best_lower,decision\n";
+    for (const RaceDecision& d : state.decisions)
+      s << fmt::format("{},\"{}\",{},{:.6g},{:.6g},{:.6g},{:.6g},{}\n", d.round + 1,
+                       in.cells[static_cast<std::size_t>(d.cell)].name, d.n, d.ratio, d.lower, d.upper, d.best_lower,
+                       d.dropped ? "dropped: " + d.reason : d.reason);
+  });
+}
+
+TextTable budget_table(const StudyDef& study, const ScreenGrid& grid, const std::vector<CellResult>& cells,
+                       const RaceState& state, const RunsByPoint& runs) {
+  const RacingParams& p = study.screen->racing;
+  const RaceBudget b = race_budget(p, state, grid.raced.size(), grid.baselines.size());
+  double race_cpu = 0, fixed_cpu = 0;
+  long stored = 0;
+  auto add = [&](int n, double wall) {
+    stored += n;
+    race_cpu += wall;
+    if (n > 0) fixed_cpu += wall / n * p.confirm;
+  };
+  for (const CellResult& c : cells)
+    if (c.cell->feasible) add(c.runs, c.wall_s);
+  for (const ScreenCell& base : grid.baselines) {
+    CellResult r;
+    if (auto it = runs.find({base.series, base.point}); it != runs.end()) add_wall(r, it->second);
+    add(r.runs, r.wall_s);
+  }
+  TextTable t;
+  t.title = "Budget: the race against a fixed grid at the same final confidence";
+  t.header = {"", "runs", "CPU-seconds"};
+  t.rows.push_back({"race (screen + confirmation), stored", fmt::format("{}", stored), fmt_num(race_cpu)});
+  t.rows.push_back({"race, as planned by its decisions", fmt::format("{}", b.race_runs), ""});
+  t.rows.push_back({fmt::format("fixed grid: {} replicates per cell and baseline", p.confirm),
+                    fmt::format("{}", b.fixed_runs), fmt_num(fixed_cpu)});
+  t.rows.push_back({"saved (fixed - race) / fixed",
+                    b.fixed_runs > 0 ? fmt::format("{:.0f} %", 100.0 * (b.fixed_runs - stored) / b.fixed_runs) : "",
+                    fixed_cpu > 0 ? fmt::format("{:.0f} %", 100.0 * (fixed_cpu - race_cpu) / fixed_cpu) : ""});
+  t.notes.push_back(
+      "The fixed grid's CPU-seconds are estimated from each cell's mean run cost in this store x the confirmation "
+      "replicates. Each run is single-threaded: its wall time is its CPU time.");
+  return t;
+}
+
+TextTable cells_table(const std::vector<CellResult>& cells, const RacingParams& p) {
+  TextTable t;
+  t.title = "Cells: fate and final J/J_0 (survivors: confirmation runs only)";
+  t.header = {"shape", "size/d", "D/d", "W/d", "runs", "clogs per 100 passed", "result"};
+  for (const CellResult& c : cells)
+    t.rows.push_back({c.cell->series, fmt_num(c.cell->size_d, 3), fmt_num(c.cell->distance_d, 3),
+                      fmt_num(c.cell->gap_d, 3), fmt::format("{}", c.runs),
+                      c.clogs_per_100 >= 0 ? fmt_num(c.clogs_per_100, 3) : "n/a", fate_text(c, p)});
+  return t;
+}
+
+TextTable rounds_table(const RacingParams& p, const RaceState& s, std::size_t n_cells) {
+  TextTable t;
+  t.title = "Decisions per round (every decision: decisions.csv)";
+  t.header = {"round", "replicates", "one-sided level", "decided", "kept", "dropped"};
+  for (int r = 0; r < s.rounds_decided; ++r) {
+    int kept = 0, dropped = 0;
+    for (const RaceDecision& d : s.decisions)
+      if (d.round == r) (d.dropped ? dropped : kept) += 1;
+    if (kept + dropped == 0) continue;
+    t.rows.push_back({fmt::format("{}", r + 1), fmt::format("{}", replicates_after_round(p, r)),
+                      fmt::format("{:.3g}", per_decision_alpha(p, n_cells)), fmt::format("{}", kept + dropped),
+                      fmt::format("{}", kept), fmt::format("{}", dropped)});
+  }
+  return t;
+}
+
+// One heat map per shape and gap; the PNG file names.
+std::vector<std::string> draw_maps(const ScreenGrid& grid, const std::vector<CellResult>& cells,
+                                   const fs::path& out_dir) {
+  std::vector<std::string> files;
+  std::vector<std::string> shapes;
+  for (const ScreenCell& c : grid.cells)
+    if (std::find(shapes.begin(), shapes.end(), c.series) == shapes.end()) shapes.push_back(c.series);
+  for (const std::string& shape : shapes)
+    for (const ScreenCell& gap : grid.baselines) {
+      std::vector<double> xs, ys;
+      for (const ScreenCell& c : grid.cells)
+        if (c.series == shape) xs.push_back(c.distance_d), ys.push_back(c.size_d);
+      for (auto* v : {&xs, &ys}) {
+        std::sort(v->begin(), v->end());
+        v->erase(std::unique(v->begin(), v->end()), v->end());
+      }
+      HeatMap m;
+      m.title = fmt::format("{}: J/J_0 at W = {} (confirmation runs)", shape, d_text(gap.gap_d));
+      m.ylabel = shape == "cylinder" ? "diameter/d" : "side/d";
+      for (double x : xs) m.xs.push_back(fmt::format("{:.3g}", x));
+      for (double y : ys) m.ys.push_back(fmt::format("{:.3g}", y));
+      m.legend = "* interval above 1 (95 %), ** also Bonferroni over survivors, - below 1; <u rN: dropped after "
+                 "round N (upper bound u), n/f: does not fit, ?: not decided yet";
+      for (const CellResult& c : cells) {
+        if (c.cell->series != shape || c.cell->gap != gap.gap) continue;
+        HeatCell h;
+        h.ix = static_cast<std::size_t>(std::lower_bound(xs.begin(), xs.end(), c.cell->distance_d) - xs.begin());
+        h.iy = static_cast<std::size_t>(std::lower_bound(ys.begin(), ys.end(), c.cell->size_d) - ys.begin());
+        h.state = c.state;
+        h.value = c.state == HeatCell::State::final ? c.final.ratio.ratio : c.last.ratio;
+        if (c.state == HeatCell::State::final && !c.final.ratio.valid) h.state = HeatCell::State::missing;
+        h.text = map_text(c);
+        h.side_value = c.clogs_per_100;
+        h.side_text = c.clogs_per_100 >= 0 ? fmt::format("{:.2g}", c.clogs_per_100) : "";
+        m.cells.push_back(h);
+      }
+      const std::string file = fmt::format("screen_map_{}_W{:.3g}d.png", shape, gap.gap_d);
+      draw_heatmap_png(m, out_dir / file);
+      files.push_back(file);
+    }
+  return files;
+}
+
+}  // namespace
+
+ExperimentSection screen_section(const StudyDef& study, const std::vector<StoredRun>& runs, const fs::path& out_dir,
+                                 bool plots) {
+  const RacingParams& p = study.screen->racing;
+  const ScreenGrid grid = screen_grid(study);
+  const RaceInput in = screen_race_input(study, grid, runs);
+  const RaceState state = replay_race(p, in);
+  RunsByPoint by_point;
+  for (const StoredRun& r : runs)
+    if (r.id.model == to_string(grid.model)) by_point[{r.id.series, r.id.point}].push_back(&r);
+  const std::vector<CellResult> cells = cell_results(study, grid, in, state, by_point);
+
+  ExperimentSection s;
+  s.title = "Screen: where does an obstruction raise J?";
+  s.paragraphs.push_back(fmt::format(
+      "{} cells ({} infeasible: the obstruction does not fit there), {} gaps, {} model. Racing: every cell gets {} "
+      "replicates, then {} more per round up to {} ({} rounds). After each round a cell is **dropped** when the "
+      "one-sided upper bound of J/J_0 (delta method, Welch degrees of freedom) at level {} = {:.3g} is below {}{}: "
+      "{} (Bonferroni). {}",
+      grid.cells.size(), grid.cells.size() - grid.raced.size(), grid.baselines.size(), to_string(grid.model),
+      p.initial, p.step, p.max, race_rounds(p), p.family ? "alpha / (cells x rounds)" : "alpha / rounds",
+      per_decision_alpha(p, grid.raced.size()), p.drop_below,
+      p.best_margin ? fmt::format(", or below the best cell's lower bound minus {}", *p.best_margin) : "",
+      p.family ? fmt::format("with probability >= {:.0f} % no cell whose true J/J_0 is >= {} is dropped",
+                             100 * (1 - p.alpha), p.drop_below)
+               : fmt::format("a cell whose true J/J_0 is >= {} is dropped with probability <= {:.0f} % (per cell, "
+                             "not for the whole map: scope = \"family\" for that)",
+                             p.drop_below, 100 * p.alpha),
+      state.screening_done(p) ? "" : fmt::format("**Incomplete**: {} of {} rounds decided.", state.rounds_decided,
+                                                 race_rounds(p))));
+  s.paragraphs.push_back(fmt::format(
+      "Final statistics: each survivor and each baseline gets {} **fresh** replicates (indices {} to {}); its J/J_0 "
+      "and {:.0f} % interval use those runs only, never the runs that decided its fate, so the selection does not "
+      "bias them (no correction needed). `*`: interval above 1; `**`: above 1 also at the Bonferroni level over the "
+      "survivors (a family-wise statement for the whole map). Runs that did not empty enter the race and the final "
+      "J with N / t_end, an upper bound. The generic tables above pool screening and confirmation runs: read this "
+      "section's numbers instead.",
+      p.confirm, p.max, p.max + p.confirm - 1, 100 * p.confidence));
+  write_decisions_csv(out_dir / "decisions.csv", in, state);
+  s.tables.push_back(budget_table(study, grid, cells, state, by_point));
+  s.tables.push_back(rounds_table(p, state, grid.raced.size()));
+  s.tables.push_back(cells_table(cells, p));
+  if (plots) {
+    std::string list;
+    for (const std::string& f : draw_maps(grid, cells, out_dir)) list += fmt::format("![{}]({})\n", f, f);
+    s.paragraphs.push_back("Heat maps (left J/J_0, right clogs per 100 particles passed):\n\n" + list);
+  }
+  return s;
+}
+
+ExperimentSection screen_report_section(const ReportRequest& request, const fs::path& db,
+                                        const std::vector<StoredRun>& runs, const fs::path& out_dir,
+                                        std::ostream& log) {
+  try {
+    const std::string name = runs.empty() ? std::string() : runs.front().id.study;
+    const StudyDef study = study_for_snapshots(db, request.study, name);
+    if (study.screen) return screen_section(study, runs, out_dir, request.plots);
+    throw std::invalid_argument("the study file has no [screen] table");
+  } catch (const std::exception& e) {
+    log << "warning: no screen section: " << e.what() << "\n";
+    ExperimentSection s;
+    s.title = "Screen";
+    s.paragraphs.push_back(fmt::format("The screen's grid could not be rebuilt: {}", e.what()));
+    return s;
+  }
+}
+
+}  // namespace gapflow

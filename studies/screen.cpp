@@ -1,0 +1,180 @@
+#include "studies/screen.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <map>
+#include <ostream>
+#include <set>
+#include <stdexcept>
+
+namespace gapflow {
+
+std::string d_text(double v) { return fmt::format("{:.3g} d", v); }
+
+namespace {
+
+const SeriesDef& series_named(const StudyDef& study, const std::string& label) {
+  for (const SeriesDef& s : study.series)
+    if (s.label == label) return s;
+  throw std::logic_error("screen study without series " + label);
+}
+
+double axis_number(const SweepAxis& a, std::size_t i) { return std::stod(a.values.at(i).toml); }
+
+// A scenario check that says the obstruction does not fit where the cell puts it.
+bool infeasible_placement(const ScenarioError& e) {
+  return e.key() == "obstruction.distance_mm" || e.key() == "obstruction.lateral_offset_mm";
+}
+
+}  // namespace
+
+ScreenGrid screen_grid(const StudyDef& study) {
+  if (!study.screen) throw std::logic_error("screen_grid: not a screen study");
+  const double d = study.screen->d_mm;
+  ScreenGrid g;
+  g.model = study.models.at(0);
+  const SeriesDef& none = series_named(study, kScreenBaseline);
+  const SweepAxis& gaps = none.axes.at(0);
+  for (std::size_t w = 0; w < gaps.values.size(); ++w) {
+    ScreenCell b{none.label, static_cast<int>(w), "", 0, 0, axis_number(gaps, w) / d, static_cast<int>(w), true, ""};
+    b.label = "W " + d_text(b.gap_d);
+    point_jobs(study, none, b.point, g.model, 0, 1);  // a bad baseline is an error
+    g.baselines.push_back(b);
+  }
+  for (const SeriesDef& s : study.series) {
+    if (s.label == kScreenBaseline) continue;
+    const SweepAxis &size = s.axes.at(0), &dist = s.axes.at(1), &gap = s.axes.at(2);
+    int point = 0;
+    for (std::size_t i = 0; i < size.values.size(); ++i)
+      for (std::size_t j = 0; j < dist.values.size(); ++j)
+        for (std::size_t w = 0; w < gap.values.size(); ++w, ++point) {
+          ScreenCell c{s.label, point, "", axis_number(size, i) / d, axis_number(dist, j) / d,
+                       axis_number(gap, w) / d, static_cast<int>(w), true, ""};
+          c.label = fmt::format("{} size {}, D {}, W {}", s.label, d_text(c.size_d), d_text(c.distance_d),
+                                d_text(c.gap_d));
+          try {
+            point_jobs(study, s, point, g.model, 0, 1);
+          } catch (const ScenarioError& e) {
+            if (!infeasible_placement(e)) throw;
+            c.feasible = false;
+            c.why_not = e.allowed();
+          }
+          if (c.feasible) g.raced.push_back(static_cast<int>(g.cells.size()));
+          g.cells.push_back(std::move(c));
+        }
+  }
+  return g;
+}
+
+double screen_j(const RunRecord& r, const std::string& j_kind) {
+  const std::optional<double>& j = j_kind == "flowing" ? r.j_flowing : j_kind == "mid" ? r.j_mid : r.j_paper;
+  if (j) return *j;
+  return r.sim_time_s > 0 ? r.particles / r.sim_time_s : std::nan("");
+}
+
+RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs) {
+  const RacingParams& p = study.screen->racing;
+  const auto slots = static_cast<std::size_t>(p.max + p.confirm);
+  const std::string model = to_string(grid.model);
+  std::map<std::pair<std::string, int>, std::vector<double>> j;  // (series, point) -> J by replicate
+  for (const StoredRun& r : runs) {
+    if (r.id.study != study.name || r.id.model != model || r.id.replicate < 0) continue;
+    auto& v = j[{r.id.series, r.id.point}];
+    v.resize(slots, std::nan(""));
+    const auto rep = static_cast<std::size_t>(r.id.replicate);
+    if (rep < slots) v[rep] = screen_j(r.record, study.report.j);
+  }
+  auto values = [&](const ScreenCell& c) {
+    auto it = j.find({c.series, c.point});
+    return it != j.end() ? it->second : std::vector<double>(slots, std::nan(""));
+  };
+  RaceInput in;
+  for (const ScreenCell& b : grid.baselines) {
+    in.baseline_names.push_back(b.label);
+    in.baselines.push_back(values(b));
+  }
+  for (int i : grid.raced) {
+    const ScreenCell& c = grid.cells[static_cast<std::size_t>(i)];
+    in.cells.push_back({c.label, c.gap, values(c)});
+  }
+  return in;
+}
+
+std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid, const RaceState& state) {
+  const RacingParams& p = study.screen->racing;
+  const bool confirming = state.screening_done(p);
+  const int from = confirming ? p.max : 0;
+  const int to = confirming ? p.max + p.confirm : replicates_after_round(p, state.rounds_decided);
+  std::vector<Job> out;
+  auto add = [&](const ScreenCell& c) {
+    for (Job& job : point_jobs(study, series_named(study, c.series), c.point, grid.model, from, to))
+      out.push_back(std::move(job));
+  };
+  bool any_alive = false;
+  for (std::size_t k = 0; k < grid.raced.size(); ++k)
+    if (state.alive(static_cast<int>(k))) {
+      add(grid.cells[static_cast<std::size_t>(grid.raced[k])]);
+      any_alive = true;
+    }
+  if (any_alive)
+    for (const ScreenCell& b : grid.baselines) add(b);
+  return out;
+}
+
+namespace {
+
+void print_round(std::ostream& log, const RacingParams& p, const RaceState& s, int round, std::size_t n_cells) {
+  int kept = 0, dropped = 0;
+  for (const RaceDecision& d : s.decisions)
+    if (d.round == round) (d.dropped ? dropped : kept) += 1;
+  if (kept + dropped == 0) return;  // every cell was dropped before this round
+  log << fmt::format("screen round {}/{} ({} replicates per cell, one-sided level {:.2g} per decision): {} kept, "
+                     "{} dropped\n",
+                     round + 1, race_rounds(p), replicates_after_round(p, round),
+                     per_decision_alpha(p, n_cells), kept, dropped);
+}
+
+// Counts jobs once, though each round lists the earlier rounds' replicates again (resume).
+void add_summary(RunnerSummary& total, const RunnerSummary& step, const std::vector<Job>& jobs,
+                 const std::set<std::string>& stored_before, std::set<std::string>& listed) {
+  for (const Job& j : jobs)
+    if (listed.insert(j.id.key).second) {
+      total.total += 1;
+      total.already_stored += stored_before.count(j.id.key) ? 1 : 0;
+    }
+  total.done_now += step.done_now;
+  total.failed.insert(total.failed.end(), step.failed.begin(), step.failed.end());
+  total.cancelled = step.cancelled;
+}
+
+}  // namespace
+
+RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOptions& options, const JobRunner& run,
+                         std::ostream& log) {
+  const RacingParams& p = study.screen->racing;
+  const ScreenGrid grid = screen_grid(study);
+  log << fmt::format("screen '{}': {} cells ({} infeasible: the obstruction does not fit), {} gaps; {} rounds of "
+                     "{} + {} replicates up to {}, then {} confirmation replicates per survivor\n",
+                     study.name, grid.cells.size(), grid.cells.size() - grid.raced.size(), grid.baselines.size(),
+                     race_rounds(p), p.initial, p.step, p.max, p.confirm);
+  RunnerSummary total;
+  const std::set<std::string> stored_before = store.keys();
+  std::set<std::string> listed;
+  int printed = 0;
+  for (int stage = 0; stage <= race_rounds(p) + 1; ++stage) {
+    const RaceState state = replay_race(p, screen_race_input(study, grid, store.load(study.name)));
+    for (; printed < state.rounds_decided; ++printed) print_round(log, p, state, printed, grid.raced.size());
+    const std::vector<Job> jobs = screen_next_jobs(study, grid, state);
+    const bool confirming = state.screening_done(p);
+    if (confirming)
+      log << fmt::format("screen confirmation: {} jobs (fresh replicates {} to {})\n", jobs.size(), p.max,
+                         p.max + p.confirm - 1);
+    const RunnerSummary step = run(jobs, store, options);
+    add_summary(total, step, jobs, stored_before, listed);
+    if (step.cancelled || !step.failed.empty() || confirming) return total;
+  }
+  throw std::runtime_error("the screen made no progress: a round's runs are stored but the race cannot decide it");
+}
+
+}  // namespace gapflow

@@ -1,0 +1,63 @@
+// Running a [screen] study (studies/screen_def.hpp) round by round with the racing scheme
+// of studies/racing.hpp: every round adds replicates to the cells still alive and to the
+// baselines, into the study's store under the usual job keys; the race is then replayed
+// from the store. Nothing else is kept: the decisions are a function of the stored runs
+// of completed rounds (never of timing or worker count), so a killed screen resumes by
+// running the same command, and `gapflow report` re-derives every decision.
+#pragma once
+
+#include "studies/racing.hpp"
+#include "studies/runner.hpp"
+#include "studies/store.hpp"
+#include "studies/study.hpp"
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+// One cell of the screen (or a baseline: series "none", one per gap).
+struct ScreenCell {
+  std::string series;  // shape ("cylinder", "A", "V") or "none"
+  int point = 0;       // index in its series' grid
+  std::string label;   // "size 3 d, D 2 d, W 4 d"
+  double size_d = 0, distance_d = 0, gap_d = 0;  // in nominal d (size, distance: 0 for a baseline)
+  int gap = 0;                                   // index of its gap = its baseline
+  bool feasible = true;
+  std::string why_not;  // the scenario check that refused it (e.g. the obstruction overlaps a wall)
+};
+
+struct ScreenGrid {
+  ModelKind model = ModelKind::box2d;
+  std::vector<ScreenCell> cells;      // every shape cell, series then point order
+  std::vector<ScreenCell> baselines;  // one per gap, gap order
+  std::vector<int> raced;             // the feasible cells (indices into cells): RaceInput::cells order
+};
+
+// The grid of a screen study, each cell checked by compiling its first job: a cell whose
+// obstruction does not fit (overlaps a wall, leaves the board) is infeasible, not an error;
+// any other bad scenario throws ScenarioError like expand_jobs.
+ScreenGrid screen_grid(const StudyDef& study);
+
+// The J the race uses: J of the study's [report] j kind; a run where it is undefined (the
+// board did not empty) enters with N / t_end, an upper bound of its J_paper (such a run
+// can only look better than it is: conservative for dropping).
+double screen_j(const RunRecord& r, const std::string& j_kind);
+
+// J by replicate index for every raced cell and baseline, from the stored runs.
+RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs);
+
+// The jobs the race needs next: the missing replicates of the next round (alive cells and
+// every baseline), or after the last round the confirmation batch; empty when done.
+std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid, const RaceState& state);
+
+// Run the screen to its end (or until a job fails or the run is cancelled), printing each
+// round's decisions to `log`.
+RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOptions& options, const JobRunner& run,
+                         std::ostream& log);
+
+// "3 d": a length in d as the tables and labels print it.
+std::string d_text(double v);
+
+}  // namespace gapflow

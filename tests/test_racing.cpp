@@ -1,0 +1,348 @@
+// The racing screen (studies/racing.hpp, screen.hpp, report_screen.cpp):
+//   * on synthetic cells with known J/J_0 (no simulation): the family-wise error of the drop
+//     decisions, the power to drop clearly bad cells, and the coverage of the final intervals
+//     over 500 repetitions;
+//   * decisions read completed rounds only;
+//   * a tiny end-to-end screen (2 diameters x 3 distances x 1 gap, 2D) runs, decides, resumes
+//     and writes its report; bad [screen] keys exit 2 with file:line:column.
+#include "studies/racing.hpp"
+
+#include "common/simulation.hpp"
+#include "studies/screen.hpp"
+
+#include "common/random.hpp"
+#include "test_support.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+namespace gapflow {
+namespace {
+
+using gapflow::testing::run_gapflow;
+using gapflow::testing::shell_quoted;
+using gapflow::testing::source_path;
+using gapflow::testing::TempDir;
+
+// True J/J_0 of synthetic cells. "Mixed": clearly below, near and above 1. "Mostly low": what
+// the 2D model shows at W = 33 mm (results/README.md), most cells well below J_0.
+const std::vector<double> kMixed{0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 1.0, 1.0, 1.05, 1.08, 1.12, 1.15};
+const std::vector<double> kMostlyLow{0.4, 0.5, 0.55, 0.6, 0.65, 0.7, 0.7, 0.75, 0.8, 0.95, 1.0, 1.1};
+constexpr double kJ0 = 100, kSd = 8;  // particles/s; run-to-run spread (CV 8 %)
+
+// J of (cell, replicate) in repetition `rep`: normal around truth x J_0. Cell -1 = the baseline.
+double synthetic_j(const std::vector<double>& truth, std::uint64_t rep, int cell, int replicate) {
+  RandomStream rs(mix_seed(mix_seed(rep, static_cast<std::uint64_t>(cell + 1)), static_cast<std::uint64_t>(replicate)));
+  const double mean = cell < 0 ? kJ0 : truth[static_cast<std::size_t>(cell)] * kJ0;
+  return mean + kSd * rs.normal();
+}
+
+// The input as a driver would see it after running every round and the confirmation: the
+// race must only read what its rounds allow (replicates it would not have run are present too).
+RaceInput synthetic_input(const std::vector<double>& truth, const RacingParams& p, std::uint64_t rep) {
+  RaceInput in;
+  const int slots = p.max + p.confirm;
+  in.baseline_names = {"J_0"};
+  in.baselines.emplace_back();
+  for (int r = 0; r < slots; ++r) in.baselines[0].push_back(synthetic_j(truth, rep, -1, r));
+  for (std::size_t c = 0; c < truth.size(); ++c) {
+    RaceCell cell{"cell " + std::to_string(c), 0, {}};
+    for (int r = 0; r < slots; ++r) cell.j.push_back(synthetic_j(truth, rep, static_cast<int>(c), r));
+    in.cells.push_back(cell);
+  }
+  return in;
+}
+
+struct SyntheticOutcome {
+  double family_error = 0;     // share of repetitions dropping some cell with truth >= 1
+  double cell_error = 0;       // share of (repetition, cell with truth >= 1) dropped
+  double best_kept = 0;        // share of repetitions keeping the truly best cell
+  double worst_dropped = 0;    // share of repetitions dropping the truly worst cell
+  double coverage = 0;         // of the final intervals of survivors
+  long intervals = 0;
+  double race_runs = 0, fixed_runs = 0;  // per repetition
+};
+
+constexpr int kReps = 500;
+
+SyntheticOutcome race_synthetic(const std::vector<double>& truth, const RacingParams& p) {
+  SyntheticOutcome o;
+  long good = 0, good_dropped = 0, covered = 0;
+  const auto best = static_cast<int>(std::max_element(truth.begin(), truth.end()) - truth.begin());
+  const auto worst = static_cast<int>(std::min_element(truth.begin(), truth.end()) - truth.begin());
+  for (int rep = 0; rep < kReps; ++rep) {
+    const RaceInput in = synthetic_input(truth, p, static_cast<std::uint64_t>(rep) + 1000);
+    const RaceState s = replay_race(p, in);
+    EXPECT_TRUE(s.screening_done(p));
+    bool dropped_good = false;
+    std::size_t survivors = 0;
+    for (std::size_t c = 0; c < truth.size(); ++c) survivors += s.alive(static_cast<int>(c)) ? 1 : 0;
+    for (std::size_t c = 0; c < truth.size(); ++c) {
+      const int cell = static_cast<int>(c);
+      if (truth[c] >= p.drop_below) {
+        ++good;
+        good_dropped += s.alive(cell) ? 0 : 1;
+        dropped_good = dropped_good || !s.alive(cell);
+      }
+      if (!s.alive(cell)) continue;
+      const FinalEstimate f = final_estimate(p, in, cell, survivors);
+      EXPECT_TRUE(f.ratio.valid);
+      ++o.intervals;
+      covered += f.ratio.lo <= truth[c] && truth[c] <= f.ratio.hi ? 1 : 0;
+    }
+    o.family_error += dropped_good ? 1 : 0;
+    o.best_kept += s.alive(best) ? 1 : 0;
+    o.worst_dropped += s.alive(worst) ? 0 : 1;
+    const RaceBudget b = race_budget(p, s, truth.size(), 1);
+    o.race_runs += static_cast<double>(b.race_runs);
+    o.fixed_runs += static_cast<double>(b.fixed_runs);
+  }
+  o.family_error /= kReps;
+  o.best_kept /= kReps;
+  o.worst_dropped /= kReps;
+  o.race_runs /= kReps;
+  o.fixed_runs /= kReps;
+  o.cell_error = static_cast<double>(good_dropped) / static_cast<double>(good);
+  o.coverage = static_cast<double>(covered) / static_cast<double>(o.intervals);
+  std::cout << (p.family ? "family" : "cell") << " scope, " << truth.size() << " cells, " << kReps
+            << " repetitions: drop error per good cell " << o.cell_error << ", family-wise " << o.family_error
+            << " (alpha " << p.alpha << "), best kept " << o.best_kept << ", worst dropped " << o.worst_dropped
+            << ", coverage " << o.coverage << " (" << o.intervals << " intervals), runs " << o.race_runs
+            << " vs fixed grid " << o.fixed_runs << "\n";
+  return o;
+}
+
+// Binomial sd of a 0.05 rate over 500 repetitions: 0.0097; the error tolerances are 3 sd.
+// Fresh confirmation runs: the intervals cover at their nominal 95 % (the delta method and
+// Welch df are approximations: a 2.5 % tolerance).
+TEST(Racing, PerCellScopeKeepsGoodCellsAndCovers) {
+  RacingParams p;  // initial 3, step 3, max 12, confirm 10, alpha 0.05 per cell, drop below 1
+  for (const auto* truth : {&kMixed, &kMostlyLow}) {
+    const SyntheticOutcome o = race_synthetic(*truth, p);
+    EXPECT_LE(o.cell_error, p.alpha + 0.03);
+    EXPECT_GE(o.best_kept, 1 - p.alpha - 0.03);
+    EXPECT_GE(o.worst_dropped, 0.95);  // the race must drop something: J/J_0 <= 0.6 is far below 1
+    EXPECT_NEAR(o.coverage, p.confidence, 0.025);
+    // Most cells clearly below J_0: the race spends fewer runs than a fixed grid of `confirm` per
+    // cell. (With many cells near 1 it spends more: survivors pay screening + confirmation.)
+    if (truth == &kMostlyLow) {
+      EXPECT_LT(o.race_runs, o.fixed_runs);
+    }
+  }
+}
+
+TEST(Racing, FamilyScopeKeepsEveryGoodCellAndCovers) {
+  RacingParams p;
+  p.family = true;
+  const SyntheticOutcome o = race_synthetic(kMixed, p);
+  EXPECT_LE(o.family_error, p.alpha + 0.03);
+  EXPECT_GE(o.best_kept, 1 - p.alpha - 0.03);
+  EXPECT_NEAR(o.coverage, p.confidence, 0.025);
+}
+
+// Reusing the screening runs for the final estimate would be biased by the selection: of the
+// cells with J/J_0 = 0.85, the survivors are the lucky ones. The fresh confirmation removes that;
+// this test shows the bias is there to remove (so the coverage tests measure something).
+TEST(Racing, ScreeningRunsOfSurvivorsAreBiasedUpward) {
+  RacingParams p;
+  p.max = 3;  // one round: the decision and the naive estimate use the same 3 runs
+  double naive_bias = 0, fresh_bias = 0;
+  int n = 0;
+  for (int rep = 0; rep < kReps; ++rep) {
+    const RaceInput in = synthetic_input(kMixed, p, static_cast<std::uint64_t>(rep) + 77);
+    const RaceState s = replay_race(p, in);
+    for (std::size_t c = 0; c < kMixed.size(); ++c) {
+      if (!s.alive(static_cast<int>(c)) || kMixed[c] != 0.85) continue;
+      const RatioEstimate naive = ratio_interval(replicate_slice(in.cells[c].j, 0, p.max),
+                                                 replicate_slice(in.baselines[0], 0, p.max), 0.95);
+      naive_bias += naive.ratio - kMixed[c];
+      fresh_bias += final_estimate(p, in, static_cast<int>(c), 1).ratio.ratio - kMixed[c];
+      ++n;
+    }
+  }
+  ASSERT_GT(n, 20);
+  std::cout << "J/J_0 = 0.85 survivors of one round: " << n << " of " << kReps
+            << ", bias of the screening-run estimate " << naive_bias / n << ", of the confirmation estimate "
+            << fresh_bias / n << "\n";
+  EXPECT_GT(naive_bias / n, 0.03);
+  EXPECT_LT(std::abs(fresh_bias / n), 0.015);
+}
+
+TEST(Racing, DecidesOnlyCompletedRounds) {
+  RacingParams p;
+  RaceInput in = synthetic_input(kMixed, p, 5);
+  const RaceState full = replay_race(p, in);
+  // Round 2 needs 6 replicates of every alive cell: remove one from a cell kept after round 1.
+  int kept_cell = -1;
+  for (const RaceDecision& d : full.decisions)
+    if (d.round == 0 && !d.dropped) kept_cell = d.cell;
+  ASSERT_GE(kept_cell, 0);
+  in.cells[static_cast<std::size_t>(kept_cell)].j[4] = std::nan("");
+  const RaceState partial = replay_race(p, in);
+  EXPECT_EQ(partial.rounds_decided, 1);
+  EXPECT_FALSE(partial.screening_done(p));
+  // Round 1's decisions are the same whatever else is stored.
+  std::size_t round1 = 0;
+  for (const RaceDecision& d : full.decisions)
+    if (d.round == 0) {
+      ASSERT_LT(round1, partial.decisions.size());
+      EXPECT_EQ(d.dropped, partial.decisions[round1].dropped);
+      EXPECT_DOUBLE_EQ(d.upper, partial.decisions[round1].upper);
+      ++round1;
+    }
+  EXPECT_EQ(round1, partial.decisions.size());
+  EXPECT_EQ(race_rounds(p), 4);
+  EXPECT_EQ(replicates_after_round(p, 3), 12);
+}
+
+TEST(Racing, RatioIntervalOfKnownSamples) {
+  // cell mean 110, sd 10; base mean 100, sd 10; n = 4 each: R = 1.1,
+  // se = sqrt(100/4 + 1.21 * 100/4) / 100 = 0.0743, df = (25 + 30.25)^2 / ((625 + 915.06) / 3) = 5.946.
+  const RatioEstimate r = ratio_interval({100, 120, 100, 120}, {90, 110, 90, 110}, 0.95);
+  ASSERT_TRUE(r.valid);
+  EXPECT_NEAR(r.ratio, 1.1, 1e-12);
+  EXPECT_NEAR(r.se, std::sqrt(25 + 30.25) / 100 * std::sqrt(4.0 / 3.0), 1e-9);  // sample sd = 11.547
+  EXPECT_GT(r.df, 5);
+  EXPECT_LT(r.df, 6.5);
+  EXPECT_LT(r.lo, 1.1);
+  EXPECT_GT(r.hi, 1.1);
+  EXPECT_FALSE(ratio_interval({1}, {1, 2}, 0.95).valid);
+}
+
+// ---------------------------------------------------------------- end to end
+
+std::string read_all(const std::filesystem::path& f) {
+  std::ifstream in(f);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+TEST(ScreenStudy, TinyMapRunsDecidesResumesAndReports) {
+  TempDir dir("screen");
+  const std::string study = shell_quoted(source_path("studies/examples/tiny_screen.toml").string());
+  const std::string db = shell_quoted((dir / "s.sqlite").string());
+  const auto run = run_gapflow("study " + study + " --db " + db + " --jobs 2", 300);
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_NE(run.output.find("screen round 1/2"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("screen confirmation"), std::string::npos) << run.output;
+  const auto again = run_gapflow("study " + study + " --db " + db + " --jobs 1", 120);  // resume: nothing to do
+  ASSERT_EQ(again.code, 0) << again.output;
+  EXPECT_NE(again.output.find(" 0 runs done now"), std::string::npos) << again.output;
+  const std::string out = shell_quoted((dir / "report").string());
+  const auto rep = run_gapflow("report " + db + " --out " + out + " --no-snapshots", 120);
+  ASSERT_EQ(rep.code, 0) << rep.output;
+  const std::string md = read_all(dir / "report" / "report.md");
+  EXPECT_NE(md.find("Screen: where does an obstruction raise J?"), std::string::npos);
+  EXPECT_NE(md.find("Budget: the race against a fixed grid"), std::string::npos);
+  EXPECT_NE(md.find("fresh"), std::string::npos);
+  const std::string csv = read_all(dir / "report" / "decisions.csv");
+  EXPECT_EQ(csv.rfind("round,cell,n,ratio,lower,upper,best_lower,decision\n", 0), 0u) << csv;
+  EXPECT_NE(csv.find("\n1,\"cylinder size 2 d, D 1 d, W 4 d\",2,"), std::string::npos) << csv;
+  EXPECT_TRUE(std::filesystem::exists(dir / "report" / "screen_map_cylinder_W4d.png")) << md;
+  // One worker instead of two, another store: the same decisions (they never depend on timing).
+  const std::string db1 = shell_quoted((dir / "s1.sqlite").string()), out1 = shell_quoted((dir / "r1").string());
+  ASSERT_EQ(run_gapflow("study " + study + " --db " + db1 + " --jobs 1", 300).code, 0);
+  ASSERT_EQ(run_gapflow("report " + db1 + " --out " + out1 + " --no-snapshots --no-plots", 120).code, 0);
+  EXPECT_EQ(read_all(dir / "r1" / "decisions.csv"), csv);
+}
+
+// The driver without simulation: each job returns J = (1 - 0.1 x point) x 100 + noise seeded by
+// its key. Interrupted after 9 runs (mid-round 1), then resumed: the same decisions and runs as
+// a screen run in one go.
+RunRecord fake_run(const Job& job) {
+  RunRecord r;
+  r.model = job.id.model;
+  r.replicate = job.id.replicate;
+  r.particles = r.passed = 60;
+  r.diameter_m = 0.00775;  // m
+  r.gap_m = 0.031;         // m
+  r.sim_time_s = r.wall_time_s = 1;
+  r.end_reason = EndReason::all_passed;
+  const double mean = job.id.series == "none" ? 100 : 100 * (1 - 0.1 * job.id.point);
+  RandomStream rs(std::stoull(job.id.key, nullptr, 16));
+  r.j_paper = mean + 5 * rs.normal();
+  return r;
+}
+
+std::string decisions_of(const StudyDef& study, Store& store) {
+  const ScreenGrid grid = screen_grid(study);
+  const RaceState s = replay_race(study.screen->racing, screen_race_input(study, grid, store.load(study.name)));
+  std::string out;
+  for (const RaceDecision& d : s.decisions) out += fmt::format("{} {} {} {:.9g}\n", d.round, d.cell, d.dropped, d.upper);
+  return out;
+}
+
+TEST(ScreenStudy, DriverResumesMidRoundWithTheSameDecisions) {
+  TempDir dir("screen-driver");
+  const StudyDef study = load_study(source_path("studies/examples/tiny_screen.toml"));
+  std::ostringstream log;
+  Store straight(dir / "straight.sqlite");
+  RunnerOptions options;
+  options.workers = 2;
+  options.run = [](const Job& j, const std::atomic<bool>*) { return fake_run(j); };
+  const RunnerSummary all = run_screen(study, straight, options, run_jobs, log);
+  ASSERT_TRUE(all.failed.empty()) << all.failed.front().error;
+  EXPECT_FALSE(all.cancelled);
+  EXPECT_EQ(all.total, all.done_now);
+
+  Store resumed(dir / "resumed.sqlite");
+  std::atomic<bool> cancel{false};
+  std::atomic<int> calls{0};
+  options.workers = 1;
+  options.cancel = &cancel;
+  options.run = [&](const Job& j, const std::atomic<bool>*) {
+    if (++calls > 9) {
+      cancel = true;
+      throw RunCancelled();
+    }
+    return fake_run(j);
+  };
+  const RunnerSummary first = run_screen(study, resumed, options, run_jobs, log);
+  EXPECT_TRUE(first.cancelled);
+  EXPECT_EQ(resumed.count(), 9u);
+  cancel = false;
+  options.run = [](const Job& j, const std::atomic<bool>*) { return fake_run(j); };
+  const RunnerSummary second = run_screen(study, resumed, options, run_jobs, log);
+  EXPECT_FALSE(second.cancelled);
+  EXPECT_EQ(second.already_stored, 9);
+  EXPECT_EQ(resumed.keys(), straight.keys());
+  EXPECT_EQ(decisions_of(study, resumed), decisions_of(study, straight));
+  EXPECT_NE(decisions_of(study, straight).find(" 1 "), std::string::npos) << "some cell must be dropped";
+}
+
+// A bad [screen] key: exit 2, file:line:column, the key.
+void expect_bad(const std::string& screen_body, const std::string& where, const std::string& key,
+                const std::string& extra = "") {
+  TempDir dir("badscreen");
+  const std::string scenario = source_path("scenarios/paper/cylinder.toml").string();
+  std::ofstream(dir / "bad.toml") << "[study]\nname = \"b\"\nmodels = [\"2d\"]\n" << extra << "[screen]\nscenario = \""
+                                  << scenario << "\"\n" << screen_body;
+  const auto r = run_gapflow("study " + shell_quoted((dir / "bad.toml").string()) + " --dry-run");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.toml:" + where), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(key), std::string::npos) << r.output;
+}
+
+TEST(ScreenStudy, BadKeysExitTwoWithLocation) {
+  const std::string grid = "distance_d = [1, 2]\ngap_d = [4]\n";
+  expect_bad("shapes = [\"cylinder\"]\ncylinder_diameter_d = [2, -1]\n" + grid, "7:27", "screen.cylinder_diameter_d");
+  expect_bad("shapes = [\"square\"]\n", "6:11", "screen.shapes");
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\ndistance_d = [1]\ndistance_mm = [5]\ngap_d = [4]\n", "9:15",
+             "screen.distance_mm");
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "initail = 3\n", "10:11", "screen.initail");
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "initial = 4\nmax = 3\n", "11:7", "screen.max");
+  expect_bad("shapes = [\"A\"]\ncylinder_diameter_d = [2]\ntriangle_side_d = [2]\n" + grid, "7:23",
+             "screen.cylinder_diameter_d");
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid,
+             "4:1", "series", "[[series]]\nlabel = \"x\"\nscenario = \"x.toml\"\n");
+}
+
+}  // namespace
+}  // namespace gapflow
