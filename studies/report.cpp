@@ -333,12 +333,6 @@ const ReportPoint* baseline_for(const ReportData& data, const ReportPoint& p) {
   return nullptr;
 }
 
-const SampleStatistics& j_stats(const PointStatistics& s, JKind k) {
-  return k == JKind::paper ? s.j_paper : k == JKind::flowing ? s.j_flowing : s.j_mid;
-}
-const std::vector<double>& j_values(const PointStatistics& s, JKind k) {
-  return k == JKind::paper ? s.j_paper_values : k == JKind::flowing ? s.j_flowing_values : s.j_mid_values;
-}
 
 MeanCI mean_ci(const Summary& s) {
   MeanCI m;

@@ -108,9 +108,7 @@ ReportData collect_report_data(const std::vector<StoredRun>& runs, StudyInfo inf
 const ReportPoint* baseline_for(const ReportData& data, const ReportPoint& p);
 bool is_baseline(const ReportData& data, const ReportPoint& p);
 
-// The J statistics/values of one kind.
-const SampleStatistics& j_stats(const PointStatistics& s, JKind k);
-const std::vector<double>& j_values(const PointStatistics& s, JKind k);
+// j_stats, j_values: studies/analysis.hpp.
 
 // A mean with its Student-t 95 % interval; NaN where undefined (n = 0: all; n = 1: the interval).
 struct MeanCI {
@@ -346,5 +344,7 @@ std::string render_report_markdown(const MarkdownInput& in);
 // `out`, warnings to `log`. Throws std::invalid_argument for a missing store or
 // an empty one, ScenarioError for a bad study file.
 ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::ostream& log);
+// The analysed points alone (what make_report starts from; e.g. `gapflow report --pairing`).
+ReportData load_report_data(const ReportRequest& request, std::ostream& log);
 
 }  // namespace gapflow

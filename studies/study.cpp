@@ -24,7 +24,9 @@ namespace {
 
 // The keys each table allows.
 const std::vector<std::string> kRootKeys{"study", "series", "per_model", "quick", "confirm", "report"};
-const std::vector<std::string> kStudyKeys{"name", "description", "replicates", "models", "seed", "set"};
+const std::vector<std::string> kStudyKeys{"name",       "description", "replicates",
+                                          "models",     "seed",        "set",
+                                          "replicates_target_halfwidth", "replicates_max", "replicates_batch"};
 const std::vector<std::string> kSeriesKeys{"label", "scenario", "set", "sweep"};
 const std::vector<std::string> kSweepKeys{"key", "values", "from", "to", "step"};
 const std::vector<std::string> kQuickKeys{"replicates", "models", "thin"};
@@ -187,6 +189,16 @@ ModelPlan read_plan(StrictTable t) {
   return m;
 }
 
+// A model's own minimum under sequential replication: within [kMinSequentialReplicates, replicates_max].
+void check_sequential_plan(const StudyDef& d, const ModelPlan& m, StrictTable t) {
+  if (!d.sequential.enabled || !m.replicates) return;
+  if (*m.replicates < kMinSequentialReplicates || *m.replicates > d.sequential.max_replicates)
+    t.fail("replicates", *t.get("replicates"),
+           fmt::format("with [study] replicates_target_halfwidth, must be >= {} (the minimum before the first look) "
+                       "and <= replicates_max ({})",
+                       kMinSequentialReplicates, d.sequential.max_replicates));
+}
+
 std::string one_of(StrictTable& t, std::string_view key, const std::vector<std::string>& allowed,
                    const std::string& fallback) {
   auto v = t.text(key);
@@ -231,6 +243,35 @@ ReportDef read_report(StrictTable t) {
   return r;
 }
 
+// Sequential replication: replicates is the minimum, replicates_max the cap (studies/sequential.hpp).
+void read_sequential(StrictTable& t, StudyDef& d) {
+  SequentialDef& q = d.sequential;
+  const auto target = t.number("replicates_target_halfwidth", 0, 1);
+  if (!target) {
+    for (const char* k : {"replicates_max", "replicates_batch"})
+      if (const toml::node* n = t.get(k))
+        t.fail(k, *n, "only with replicates_target_halfwidth (sequential replication)");
+    return;
+  }
+  if (!(*target > 0)) t.fail("replicates_target_halfwidth", *t.get("replicates_target_halfwidth"),
+                             "must be a number in (0, 1]: the relative half-width, e.g. 0.02 for +-2 %");
+  q.enabled = true;
+  q.target_halfwidth = *target;
+  const auto max = t.integer("replicates_max", 1, kMaxReplicates);
+  if (!max) t.missing("replicates_max", "required with replicates_target_halfwidth: the cap per point, e.g. 40");
+  q.max_replicates = static_cast<int>(*max);
+  if (auto b = t.integer("replicates_batch", 1, kMaxReplicates)) q.batch = static_cast<int>(*b);
+  if (d.replicates < kMinSequentialReplicates) {
+    const toml::node* r = t.get("replicates");
+    t.fail(r ? "replicates" : "replicates_target_halfwidth", r ? *r : *t.get("replicates_target_halfwidth"),
+           fmt::format("with replicates_target_halfwidth, replicates (the minimum before the first look) must be "
+                       ">= {}: fewer makes stopping on a narrow interval bias it",
+                       kMinSequentialReplicates));
+  }
+  if (q.max_replicates < d.replicates)
+    t.fail("replicates_max", *t.get("replicates_max"), fmt::format("must be >= replicates ({})", d.replicates));
+}
+
 void read_study_section(StrictTable t, StudyDef& d) {
   auto name = t.text("name", true);
   if (!name) t.missing("name", "required: a non-empty string (also the output folder results/<name>/)");
@@ -242,6 +283,7 @@ void read_study_section(StrictTable t, StudyDef& d) {
   d.models = read_models(t);
   if (auto seed = t.integer("seed", 0)) d.seed = static_cast<std::uint64_t>(*seed);
   d.set = read_set(t);
+  read_sequential(t, d);
 }
 
 }  // namespace
@@ -266,8 +308,10 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
   if (const toml::table* pm = root.table("per_model")) {
     StrictTable plans(pm, "per_model", source, kModelNames);
     for (const std::string& name : kModelNames)
-      if (const toml::table* t = plans.table(name))
+      if (const toml::table* t = plans.table(name)) {
         d.per_model[parse_model_kind(name)] = read_plan(StrictTable(t, "per_model." + name, source, kPlanKeys));
+        check_sequential_plan(d, d.per_model[parse_model_kind(name)], StrictTable(t, "per_model." + name, source, kPlanKeys));
+      }
   }
   if (const toml::table* q = root.table("quick")) d.quick = read_quick(StrictTable(q, "quick", source, kQuickKeys));
   if (const toml::table* c = root.table("confirm"))
@@ -303,6 +347,11 @@ int replicates_for(const StudyDef& study, ModelKind model) {
   return it != study.per_model.end() && it->second.replicates ? *it->second.replicates : study.replicates;
 }
 
+int max_replicates_for(const StudyDef& study, ModelKind model) {
+  const int min = replicates_for(study, model);
+  return study.sequential.enabled ? std::max(min, study.sequential.max_replicates) : min;
+}
+
 int thin_for(const StudyDef& study, ModelKind model) {
   auto it = study.per_model.find(model);
   return it != study.per_model.end() ? it->second.thin : 1;
@@ -313,6 +362,7 @@ StudyDef apply_quick(StudyDef study) {
   if (study.quick.models) study.models = *study.quick.models;
   if (study.quick.replicates) study.confirm.replicates = std::min(study.confirm.replicates, *study.quick.replicates);
   study.per_model.clear();  // --quick: one budget for every model
+  study.sequential = {};     // --quick: a fixed count, a first look (README "Sequential replication")
   for (SeriesDef& s : study.series)
     for (SweepAxis& a : s.axes) a.values = thin_values(a.values, study.quick.thin);
   return study;

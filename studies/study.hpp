@@ -3,7 +3,8 @@
 // unknown keys, wrong types and bad values are ScenarioErrors that say
 // file:line:column, the key, the value and what is allowed.
 //
-//   [study]     name, description, replicates, models, seed, set
+//   [study]     name, description, replicates, models, seed, set,
+//               replicates_target_halfwidth, replicates_max, replicates_batch (sequential replication)
 //   [[series]]  label, scenario (relative to the study file), set
 //     [[series.sweep]]  key + values, or key + from/to/step (inclusive)
 //   [per_model.2d] / [per_model.3d]  replicates, thin  (a model's own budget: the 3D
@@ -87,6 +88,18 @@ struct ReportDef {
   std::string j = "paper";         // J used by the analyses: paper | flowing | mid
 };
 
+// [study] replicates_target_halfwidth: sequential replication (studies/sequential.hpp). Each point
+// runs `replicates` (the minimum, >= kMinSequentialReplicates), then batches of `batch` more while
+// the Student-t 95 % interval of its mean J (the [report] j) is wider than +-target_halfwidth x
+// mean, up to max_replicates.
+inline constexpr int kMinSequentialReplicates = 10;
+struct SequentialDef {
+  bool enabled = false;
+  double target_halfwidth = 0;  // relative half-width (0.02 = +-2 % of the mean), dimensionless
+  int max_replicates = 0;       // cap per point and model (replicates_max)
+  int batch = 5;                // replicates added per round to a point still too wide (replicates_batch)
+};
+
 struct StudyDef {
   std::filesystem::path file;  // the study file ("" when parsed from text)
   std::string name;
@@ -100,6 +113,7 @@ struct StudyDef {
   QuickDef quick;
   ConfirmDef confirm;
   ReportDef report;
+  SequentialDef sequential;
 };
 
 // Load and validate a study file. Scenario files and keys are checked later,
@@ -119,5 +133,7 @@ bool thin_keeps(std::size_t i, std::size_t n, int thin);
 // The replicates and thinning `model` runs with (its [per_model] entry, else the study's).
 int replicates_for(const StudyDef& study, ModelKind model);
 int thin_for(const StudyDef& study, ModelKind model);
+// The most replicates `model` may run per point: replicates_for, or the sequential cap when larger.
+int max_replicates_for(const StudyDef& study, ModelKind model);
 
 }  // namespace gapflow
