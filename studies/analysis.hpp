@@ -143,11 +143,12 @@ RegimeFractions regime_fractions(const std::vector<RunRecord>& runs, double majo
 PointStatistics analyze_point(const std::vector<RunRecord>& runs, const AnalysisOptions& opt = {});
 
 // "J with obstruction > J without": ratio of mean J of `point` to that of `baseline`.
-// Paired (Pairing::when_exact, the default): when the runs with the chosen J defined have
+// Paired (Pairing::when_exact; [report] pairing = "paired"): when the runs with the chosen J defined have
 // exactly the same (run.seed, run.replicate) keys at both points, replicate r of the point and
 // replicate r of the baseline shared their particle sets, and the comparison is the paired one
 // (Fieller interval + paired t-test, common/paired_ratio.hpp; RatioComparison::paired is set).
-// Otherwise, and always with Pairing::never: the independent-sample comparison (bootstrap
+// Otherwise, and always with Pairing::never (the default: measured pair correlations are ~0,
+// README "Paired comparisons"): the independent-sample comparison (bootstrap
 // interval + Welch's t-test, statistics.hpp). studies/paired.hpp has both side by side.
 // Only runs where the chosen J is defined enter: J_paper exists only when every particle
 // passed, so a point whose runs often clog permanently looks better than it is under
@@ -162,6 +163,6 @@ const std::vector<ReplicateKey>& j_keys(const PointStatistics& s, JKind k);
 
 RatioComparison compare_to_baseline(const PointStatistics& point, const PointStatistics& baseline,
                                     JKind kind = JKind::paper, const BootstrapOptions& opt = {},
-                                    Pairing pairing = Pairing::when_exact);
+                                    Pairing pairing = Pairing::never);
 
 }  // namespace gapflow

@@ -33,6 +33,7 @@ PairedValues pair_by_replicate(const PointStatistics& point, const PointStatisti
 }
 
 std::vector<PairingRow> pairing_rows(const ReportData& data, JKind kind) {
+  const bool pairing_asked = data.study.report.pairing == Pairing::when_exact;
   std::vector<PairingRow> rows;
   for (const ReportPoint& p : data.points) {
     if (is_baseline(data, p)) continue;
@@ -47,7 +48,7 @@ std::vector<PairingRow> pairing_rows(const ReportData& data, JKind kind) {
     r.variance_factor = paired_variance_factor(r.pairs.a, r.pairs.b);
     if (r.paired.ratio_ci.valid() && r.unpaired.ratio_ci.valid() && r.unpaired.ratio_ci.width() > 0)
       r.width_ratio = r.paired.ratio_ci.width() / r.unpaired.ratio_ci.width();
-    r.used = r.pairs.exact() && r.pairs.a.size() >= 2;
+    r.used = pairing_asked && r.pairs.exact() && r.pairs.a.size() >= 2;
     rows.push_back(std::move(r));
   }
   return rows;
@@ -68,8 +69,8 @@ TextTable pairing_table(const std::vector<PairingRow>& rows, JKind kind) {
       "unpaired: all runs with J, percentile bootstrap of the ratio of means (+ Welch); paired: the runs with the "
       "same seed and replicate at both points, Fieller's interval (+ paired t). width p/u = paired / unpaired "
       "interval width; var factor = variance of the ratio paired / as independent samples on the same pairs "
-      "(delta method; ~1 - rho). The report uses the paired comparison only where the replicate sets match "
-      "exactly (only pt/base = 0/0).");
+      "(delta method; ~1 - rho). With [report] pairing = \"paired\" the report uses the paired comparison where the "
+      "replicate sets match exactly (only pt/base = 0/0); by default it stays unpaired.");
   return t;
 }
 

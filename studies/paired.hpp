@@ -37,7 +37,7 @@ struct PairingRow {
   RatioComparison paired;           // the common runs only (Fieller + paired t)
   double variance_factor = kNaN;    // paired_variance_factor of the common runs
   double width_ratio = kNaN;        // paired interval width / unpaired interval width
-  bool used = false;                // the report uses the paired one (pairs.exact(), compare_to_baseline)
+  bool used = false;                // the report uses the paired one ([report] pairing = "paired" and pairs.exact())
 };
 std::vector<PairingRow> pairing_rows(const ReportData& data, JKind kind);
 TextTable pairing_table(const std::vector<PairingRow>& rows, JKind kind);

@@ -16,6 +16,7 @@
 //   j = "paper"                # "paper" | "flowing" | "mid": the J the analyses use
 //   fit_w_min = 2.0            # flow_vs_gap: W/d range of the Beverloo fits (inclusive)
 //   fit_w_max = 12.0
+//   pairing = "unpaired"       # or "paired": J/J_0 paired by replicate where the replicate sets match
 // Files: report.cpp (options, collection), report_tables.cpp (tables, CSV),
 // report_experiments.cpp (the analyses), report_sections.cpp (their text, tables, plots),
 // report_plots.cpp (plot spec, running Python), report_output.cpp (report.md, make_report).
@@ -45,6 +46,7 @@ struct ReportOptions {
   std::vector<ReportKind> kinds;  // in the order written; empty = generic outputs only
   std::string baseline;           // series label; "" = no baseline
   JKind j = JKind::paper;
+  Pairing pairing = Pairing::never;  // "paired": J/J_0 paired by replicate where the sets match (studies/paired.hpp)
   double fit_w_min = -std::numeric_limits<double>::infinity();
   double fit_w_max = std::numeric_limits<double>::infinity();
 };

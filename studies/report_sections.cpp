@@ -147,7 +147,7 @@ PlotFigure ratio_figure(const ReportData& data, const ReportOptions& opt) {
     for (const ReportPoint* p : pts) {
       const ReportPoint* ref = baseline_for(data, *p);
       if (!ref) continue;
-      const RatioComparison c = compare_to_baseline(p->stats, ref->stats, opt.j);
+      const RatioComparison c = compare_to_baseline(p->stats, ref->stats, opt.j, {}, opt.pairing);
       if (!std::isfinite(c.ratio)) continue;
       l.x.push_back(p->stats.distance_over_d), l.y.push_back(c.ratio);
       l.ylo.push_back(c.ratio_ci.lo), l.yhi.push_back(c.ratio_ci.hi);
@@ -176,7 +176,7 @@ ExperimentSection flow_vs_distance_section(const ReportData& data, const ReportO
                     "mean {} is compared to J_0 as the ratio of means with a 95 % "
                     "percentile bootstrap interval; "
                     "\"significantly above\" means the interval lies above 1 AND Welch's "
-                    "t-test gives p < 0.05 (both must agree; below likewise). Where the runs with {} have "
+                    "t-test gives p < 0.05 (both must agree; below likewise). With [report] pairing = \"paired\", where the runs with {} have "
                     "exactly the same replicates at the point and at J_0 (same seeds, so the same particle "
                     "sets), the comparison is paired instead: Fieller's interval of the ratio of paired means, "
                     "whose verdict is the paired t-test's (marked 'paired' in the tables; points.csv "

@@ -33,7 +33,7 @@ const std::vector<std::string> kQuickKeys{"replicates", "models", "thin"};
 const std::vector<std::string> kPlanKeys{"replicates", "thin"};
 const std::vector<std::string> kModelNames{"2d", "3d"};
 const std::vector<std::string> kConfirmKeys{"model", "top", "replicates", "rank_by", "set"};
-const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max"};
+const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max", "pairing"};
 const std::vector<std::string> kJKinds{"paper", "flowing", "mid"};
 const std::vector<std::string> kReportKinds{"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"};
 
@@ -237,6 +237,7 @@ ReportDef read_report(StrictTable t) {
   }
   if (auto b = t.text("baseline", true)) r.baseline = *b;
   r.j = one_of(t, "j", kJKinds, r.j);
+  r.pairing = one_of(t, "pairing", {"unpaired", "paired"}, r.pairing);
   for (const char* k : {"fit_w_min", "fit_w_max"})  // read by the report (studies/report.cpp)
     if (const toml::node* n = t.get(k); n && !(number_value(*n) && std::isfinite(*number_value(*n))))
       t.fail(k, *n, "must be a finite number (W/d)");

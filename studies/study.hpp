@@ -12,7 +12,7 @@
 //               coarser grid; its points keep their indices in the full grid)
 //   [quick]     replicates, models, thin  (what --quick changes)
 //   [confirm]   model, top, replicates, rank_by, set  (screen -> confirm)
-//   [report]    kind (string or list), baseline, j
+//   [report]    kind (string or list), baseline, j, pairing
 #pragma once
 
 #include "models/registry.hpp"
@@ -86,6 +86,7 @@ struct ReportDef {
   std::vector<std::string> kinds;  // flow_vs_gap, flow_vs_distance, clogging, models, screen_confirm
   std::string baseline;            // series label of the no-obstruction reference ("" = none)
   std::string j = "paper";         // J used by the analyses: paper | flowing | mid
+  std::string pairing = "unpaired"; // J/J_0: unpaired | paired (by replicate where the sets match; studies/paired.hpp)
 };
 
 // [study] replicates_target_halfwidth: sequential replication (studies/sequential.hpp). Each point

@@ -122,7 +122,8 @@ PointStatistics point_with(const std::vector<int>& replicates, const std::vector
 TEST(PairedRatio, BaselineComparisonPairsOnlyExactReplicateSets) {
   const PointStatistics base = point_with({0, 1, 2, 3}, {10, 11, 9, 10.5});
   const PointStatistics same = point_with({3, 2, 1, 0}, {11.1, 9.4, 11.6, 10.4});  // order does not matter
-  const RatioComparison paired = compare_to_baseline(same, base, JKind::paper);
+  EXPECT_FALSE(compare_to_baseline(same, base, JKind::paper).paired) << "unpaired unless asked";
+  const RatioComparison paired = compare_to_baseline(same, base, JKind::paper, {}, Pairing::when_exact);
   EXPECT_TRUE(paired.paired);
   EXPECT_EQ(paired.n_a, 4u);
   EXPECT_GT(paired.correlation, 0.9) << "pairs are matched by replicate, not by position";
@@ -130,7 +131,7 @@ TEST(PairedRatio, BaselineComparisonPairsOnlyExactReplicateSets) {
 
   // Replicate 3 has no J at the point, replicate 4 none at the baseline: unpaired, all runs.
   const PointStatistics other = point_with({0, 1, 2, 4}, {10.4, 11.6, 9.4, 12});
-  const RatioComparison fallback = compare_to_baseline(other, base, JKind::paper);
+  const RatioComparison fallback = compare_to_baseline(other, base, JKind::paper, {}, Pairing::when_exact);
   EXPECT_FALSE(fallback.paired);
   EXPECT_EQ(fallback.n_a, 4u);
   const PairedValues common = pair_by_replicate(other, base, JKind::paper);
@@ -144,5 +145,5 @@ TEST(PairedRatio, BaselineComparisonPairsOnlyExactReplicateSets) {
   PointStatistics reseeded = same;
   for (ReplicateKey& k : reseeded.j_paper_keys) k.first = 8;
   EXPECT_TRUE(pair_by_replicate(reseeded, base, JKind::paper).a.empty());
-  EXPECT_FALSE(compare_to_baseline(reseeded, base, JKind::paper).paired);
+  EXPECT_FALSE(compare_to_baseline(reseeded, base, JKind::paper, {}, Pairing::when_exact).paired);
 }

@@ -244,3 +244,32 @@ TEST(Sequential, RoundsDependOnSeedsNotOnWorkersAndResume) {
   EXPECT_EQ(resumed.keys, one.keys);
   EXPECT_EQ(resumed.summary.already_stored + resumed.summary.done_now, 40);
 }
+
+// End to end with real runs (studies/examples/tiny_sequential.toml, ~35 runs of 0.2 s): the two
+// gaps stop at different counts, and running again finds everything done.
+TEST(Sequential, TinyStudyStopsAtDifferentCountsPerPoint) {
+  gapflow::testing::TempDir dir("gapflow-sequential");
+  const StudyDef study = load_study(source_path("studies/examples/tiny_sequential.toml"));
+  ASSERT_TRUE(study.sequential.enabled);
+  Store store(dir / "runs.sqlite");
+  RunnerOptions o;
+  o.workers = 2;
+  const RunnerSummary first = run_jobs(expand_jobs(study), store, o);
+  ASSERT_EQ(first.done_now, 20);
+  const RunnerSummary all = run_sequential_rounds(study, store, o, first, JobRunner(run_jobs), nullptr);
+  EXPECT_TRUE(all.failed.empty());
+  std::map<int, int> per_point;
+  for (const StoredRun& r : store.load()) per_point[r.id.point] += 1;
+  ASSERT_EQ(per_point.size(), 2u);
+  EXPECT_NE(per_point[0], per_point[1]) << "the narrow gap scatters more and runs more";
+  for (const auto& [point, n] : per_point) {
+    EXPECT_GE(n, 10);
+    EXPECT_LE(n, 20);
+    EXPECT_EQ(n % 5, 0) << "minimum plus whole batches";
+  }
+  EXPECT_EQ(all.done_now, per_point[0] + per_point[1]);
+  const RunnerSummary again = run_sequential_rounds(study, store, o, run_jobs(expand_jobs(study), store, o),
+                                                    JobRunner(run_jobs), nullptr);
+  EXPECT_EQ(again.done_now, 0) << "resumed: every round is found stored";
+  EXPECT_EQ(again.already_stored, per_point[0] + per_point[1]);
+}
