@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <map>
 
 namespace gapflow {
@@ -65,6 +67,19 @@ TextTable pairing_table(const std::vector<PairingRow>& rows, JKind kind) {
                       fmt_num(r.unpaired.ratio, 4) + " " + fmt_interval(r.unpaired.ratio_ci, 4),
                       fmt_num(r.paired.ratio, 4) + " " + fmt_interval(r.paired.ratio_ci, 4),
                       fmt_num(r.width_ratio, 3), fmt_num(r.variance_factor, 3), r.used ? "paired" : "unpaired"});
+  // Per model: the middle of the measured correlations and factors (points with >= 3 pairs).
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> by_model;
+  for (const PairingRow& r : rows)
+    if (r.pairs.a.size() >= 3 && std::isfinite(r.paired.correlation)) {
+      by_model[r.model].first.push_back(r.paired.correlation);
+      by_model[r.model].second.push_back(r.variance_factor);
+    }
+  for (const auto& [model, v] : by_model)
+    t.notes.push_back(fmt::format("model {}: {} points with >= 3 pairs; median rho {}, range [{}, {}]; median var factor {}",
+                                  model, v.first.size(), fmt_num(median(v.first), 2),
+                                  fmt_num(*std::min_element(v.first.begin(), v.first.end()), 2),
+                                  fmt_num(*std::max_element(v.first.begin(), v.first.end()), 2),
+                                  fmt_num(median(v.second), 3)));
   t.notes.push_back(
       "unpaired: all runs with J, percentile bootstrap of the ratio of means (+ Welch); paired: the runs with the "
       "same seed and replicate at both points, Fieller's interval (+ paired t). width p/u = paired / unpaired "
