@@ -63,6 +63,15 @@ void add_round(RunnerSummary& total, const RunnerSummary& round) {
 
 }  // namespace
 
+ReplicateCounts stored_replicate_counts(const std::vector<StoredRun>& runs) {
+  ReplicateCounts out;
+  for (const StoredRun& r : runs) {
+    int& n = out[{r.id.series, r.id.point, r.id.model}];
+    n = std::max(n, r.id.replicate + 1);
+  }
+  return out;
+}
+
 RunnerSummary run_sequential_rounds(const StudyDef& study, Store& store, const RunnerOptions& options,
                                     RunnerSummary summary, const JobRunner& run, std::ostream* log) {
   ReplicateCounts counts;

@@ -35,6 +35,10 @@ struct SequentialStep {
 };
 SequentialStep sequential_step(const std::vector<double>& j, int n, int max_replicates, const SequentialDef& def);
 
+// Per (series, point, model) of the stored runs: one more than the highest replicate stored (the
+// counts expand_jobs needs to rebuild the jobs of every round, e.g. for the report's snapshots).
+ReplicateCounts stored_replicate_counts(const std::vector<StoredRun>& runs);
+
 // After the study's first round (summary `first`), the further rounds until every point has
 // reached the target or its cap (or a run failed, or the study was cancelled). Progress and a
 // final per-point line go to `log` (nullptr: silent). Returns the summary of all rounds.
