@@ -5,10 +5,14 @@
 #include "common/random.hpp"
 #include "studies/analysis.hpp"
 #include "studies/paired.hpp"
+#include "studies/report.hpp"
+#include "studies/study.hpp"
+#include "tests/test_support.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 using namespace gapflow;
 
@@ -146,4 +150,43 @@ TEST(PairedRatio, BaselineComparisonPairsOnlyExactReplicateSets) {
   for (ReplicateKey& k : reseeded.j_paper_keys) k.first = 8;
   EXPECT_TRUE(pair_by_replicate(reseeded, base, JKind::paper).a.empty());
   EXPECT_FALSE(compare_to_baseline(reseeded, base, JKind::paper, {}, Pairing::when_exact).paired);
+}
+
+TEST(PairedRatio, ReportPairingKeyIsReadStrictly) {
+  EXPECT_EQ(parse_study_info("[report]\nbaseline = \"none\"\n", "s.toml").report.pairing, Pairing::never);
+  EXPECT_EQ(parse_study_info("[report]\npairing = \"paired\"\n", "s.toml").report.pairing, Pairing::when_exact);
+  try {
+    parse_study_info("[report]\nj = \"paper\"\npairing = \"maybe\"\n", "s.toml");
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.where().line, 3) << e.what();
+    EXPECT_NE(std::string(e.what()).find("paired"), std::string::npos) << e.what();
+  }
+  // The study loader knows the key too (one schema, two readers).
+  const std::string study = "[study]\nname = \"t\"\n[[series]]\nlabel = \"a\"\nscenario = \"x.toml\"\n[report]\n";
+  EXPECT_EQ(parse_study(study + "pairing = \"paired\"\n", "t.toml", ".").report.pairing, "paired");
+  try {
+    parse_study(study + "pairing = 1\n", "t.toml", ".");
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.where().line, 7) << e.what();
+    EXPECT_EQ(e.key(), "report.pairing");
+  }
+}
+
+TEST(PairedRatio, ReportPairingCommandPrintsTheTableAndWritesNothing) {
+  namespace fs = std::filesystem;
+  const fs::path store = gapflow::testing::source_path("results/cylinder-peak-3d");
+  const auto before = fs::last_write_time(store / "points.csv");
+  const auto r = gapflow::testing::run_gapflow("report " + gapflow::testing::shell_quoted(store.string()) + " --pairing");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("paired by replicate against unpaired"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("median rho"), std::string::npos) << r.output;
+  EXPECT_EQ(fs::last_write_time(store / "points.csv"), before);
+  // A study file that does not describe the store (here: no runs of study "tiny"): exit 2.
+  const auto none = gapflow::testing::run_gapflow("report " + gapflow::testing::shell_quoted(store.string()) +
+                                                  " --study " +
+                                                  gapflow::testing::shell_quoted(gapflow::testing::source_path(
+                                                      "studies/examples/tiny.toml").string()) + " --pairing");
+  EXPECT_EQ(none.code, 2) << none.output;
 }
