@@ -3,6 +3,7 @@
 #include "app/cli_errors.hpp"
 
 #include "common/scenario_loader.hpp"
+#include "studies/paired.hpp"
 #include "studies/report.hpp"
 
 #include <CLI/CLI.hpp>
@@ -16,6 +17,7 @@ struct ReportCommand::Options {
   std::string results, study, out;
   bool no_plots = false;
   bool no_snapshots = false;
+  bool pairing = false;
 };
 
 namespace {
@@ -28,6 +30,12 @@ int cmd_report(const ReportCommand::Options& o) {
   if (!o.out.empty()) r.out = o.out;
   r.plots = !o.no_plots;
   r.snapshots = !o.no_snapshots;
+  if (o.pairing) {  // a measurement printed, no file written
+    const ReportData data = load_report_data(r, std::cerr);
+    if (data.study.report.baseline.empty()) throw std::invalid_argument("--pairing: the study has no [report] baseline");
+    std::cout << render_text(pairing_table(pairing_rows(data, data.study.report.j), data.study.report.j));
+    return 0;
+  }
   make_report(r, std::cout, std::cerr);
   return 0;
 }
@@ -45,6 +53,9 @@ ReportCommand::ReportCommand(CLI::App& app) : o_(std::make_unique<Options>()) {
                     "baseline, J kind)");
   o.cmd->add_option("--out", o.out, "Output folder (default: the store's folder)");
   o.cmd->add_flag("--no-plots", o.no_plots, "Do not call Python for the PNG plots");
+  o.cmd->add_flag("--pairing", o.pairing,
+                  "Print J/J_0 per point paired by replicate against unpaired (correlation, interval widths) "
+                  "and exit; writes nothing (studies/paired.hpp)");
   o.cmd->add_flag("--no-snapshots", o.no_snapshots,
                   "Do not re-simulate one stored run per point class for the report's top-view snapshots");
 }

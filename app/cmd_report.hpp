@@ -1,13 +1,14 @@
 // The `gapflow report` subcommand.
 //
-//   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots] [--no-snapshots]
+//   gapflow report RESULTS [--study STUDY.toml] [--out DIR] [--no-plots] [--no-snapshots] [--pairing]
 //
 // RESULTS is a study's results store (runs.sqlite) or its folder. Writes
 // points.csv, plots (PNG, via studies/plot_study.py) and report.md into DIR
 // (default: the store's folder) and prints the tables; unless --no-snapshots, one
 // re-simulated top view per point class (studies/report_snapshots.hpp). The study file is
 // optional; its [report] table picks the experiment analysis
-// (studies/report.hpp).
+// (studies/report.hpp). --pairing prints J/J_0 paired by replicate against unpaired per point
+// (studies/paired.hpp) and writes nothing.
 //
 // Usage in main(): construct ReportCommand on the app before parsing; after
 // parsing, `if (auto code = report_command.run()) return *code;`. run() reports

@@ -9,6 +9,7 @@
 #include "studies/mpi_runner.hpp"
 #include "studies/runner.hpp"
 #include "studies/screen.hpp"
+#include "studies/sequential.hpp"
 #include "studies/shard.hpp"
 #include "studies/store.hpp"
 #include "studies/study.hpp"
@@ -84,6 +85,11 @@ void print_dry_run(const StudyDef& study, const std::vector<Job>& jobs, const st
   }
   std::cout << fmt::format("study '{}': {} jobs ({} replicates per point and model), store {}\n", study.name,
                            jobs.size(), study.replicates, db.string());
+  if (study.sequential.enabled)
+    std::cout << fmt::format("sequential: up to {} replicates per point, in batches of {}, until J is within "
+                             "+-{:.3g} % (jobs below: the minimum)\n",
+                             study.sequential.max_replicates, study.sequential.batch,
+                             100 * study.sequential.target_halfwidth);
   std::cout << fmt::format("{:24s} {:5s} {:>6s} {:>7s}\n", "series", "model", "jobs", "stored");
   int total_stored = 0;
   for (const auto& k : order) {
@@ -183,6 +189,11 @@ int cmd_study(const StudyCommands::Options& o) {
   })
                             : JobRunner(run_jobs);
   RunnerSummary s = study.screen ? run_screen(study, store, options, run, std::cerr) : run(jobs, store, options);
+  if (study.sequential.enabled && shard && !s.cancelled)  // the rounds decide from every share's runs
+    std::cerr << fmt::format("sequential rounds run once the shares are merged: gapflow study {} --db MERGED.sqlite\n",
+                             o.study_file);
+  else if (study.sequential.enabled && !s.cancelled && s.failed.empty())
+    s = run_sequential_rounds(study, store, options, s, run, &std::cerr);
   const bool confirm = !s.cancelled && s.failed.empty() && study.confirm.enabled;
   if (confirm && shard)  // the ranking needs every share's screen: it runs after the merge
     std::cerr << fmt::format("[confirm] runs once the shares are merged: gapflow study {} --db MERGED.sqlite\n",

@@ -232,6 +232,12 @@ struct RatioComparison {
   Interval ratio_ci;
   WelchTest welch;
   Verdict verdict = Verdict::insufficient_data;
+  // Paired comparisons (compare_ratio_paired, common/paired_ratio.hpp): a[i] and b[i] share their
+  // random numbers; ratio_ci is then Fieller's interval and the paired t-test replaces Welch's.
+  bool paired = false;
+  double correlation = kNaN;      // Pearson correlation of the pairs
+  WelchTest paired_t;             // paired t-test of a - b (dof = n - 1)
+  double p_value() const { return paired ? paired_t.p_two_sided : welch.p_two_sided; }
 };
 RatioComparison compare_ratio_of_means(const std::vector<double>& a, const std::vector<double>& b,
                                        const BootstrapOptions& opt = {});

@@ -1,6 +1,8 @@
 #include "studies/analysis.hpp"
 
 #include "common/measurement.hpp"
+#include "common/paired_ratio.hpp"
+#include "studies/paired.hpp"
 #include "common/random.hpp"
 
 #include <algorithm>
@@ -154,9 +156,10 @@ void fill_identity_and_counts(const std::vector<RunRecord>& runs, PointStatistic
     wall.push_back(r.wall_time_s);
     p.escaped_total += r.escaped;
     p.max_conservation_error = std::max(p.max_conservation_error, r.max_conservation_error);
-    if (r.j_paper) p.j_paper_values.push_back(*r.j_paper);
-    if (r.j_flowing) p.j_flowing_values.push_back(*r.j_flowing);
-    if (r.j_mid) p.j_mid_values.push_back(*r.j_mid);
+    const ReplicateKey key{r.base_seed, r.replicate};
+    if (r.j_paper) p.j_paper_values.push_back(*r.j_paper), p.j_paper_keys.push_back(key);
+    if (r.j_flowing) p.j_flowing_values.push_back(*r.j_flowing), p.j_flowing_keys.push_back(key);
+    if (r.j_mid) p.j_mid_values.push_back(*r.j_mid), p.j_mid_keys.push_back(key);
   }
   p.all_passed_fraction = mean_or_nan(all_passed);
   p.mean_passed_fraction = mean_or_nan(passed_fraction);
@@ -194,12 +197,23 @@ const char* to_string(JKind k) {
   return "?";
 }
 
+const SampleStatistics& j_stats(const PointStatistics& s, JKind k) {
+  return k == JKind::paper ? s.j_paper : k == JKind::flowing ? s.j_flowing : s.j_mid;
+}
+const std::vector<double>& j_values(const PointStatistics& s, JKind k) {
+  return k == JKind::paper ? s.j_paper_values : k == JKind::flowing ? s.j_flowing_values : s.j_mid_values;
+}
+const std::vector<ReplicateKey>& j_keys(const PointStatistics& s, JKind k) {
+  return k == JKind::paper ? s.j_paper_keys : k == JKind::flowing ? s.j_flowing_keys : s.j_mid_keys;
+}
+
 RatioComparison compare_to_baseline(const PointStatistics& point, const PointStatistics& baseline, JKind kind,
-                                    const BootstrapOptions& opt) {
-  auto values = [kind](const PointStatistics& s) -> const std::vector<double>& {
-    return kind == JKind::paper ? s.j_paper_values : kind == JKind::flowing ? s.j_flowing_values : s.j_mid_values;
-  };
-  return compare_ratio_of_means(values(point), values(baseline), opt);
+                                    const BootstrapOptions& opt, Pairing pairing) {
+  if (pairing == Pairing::when_exact) {
+    const PairedValues pairs = pair_by_replicate(point, baseline, kind);
+    if (pairs.exact() && pairs.a.size() >= 2) return compare_ratio_paired(pairs.a, pairs.b, opt.level);
+  }
+  return compare_ratio_of_means(j_values(point, kind), j_values(baseline, kind), opt);
 }
 
 }  // namespace gapflow

@@ -17,7 +17,9 @@
 #include "common/run_record.hpp"
 #include "common/statistics.hpp"
 
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace gapflow {
@@ -95,6 +97,8 @@ struct RegimeFractions {
   std::string label = "none";
 };
 
+using ReplicateKey = std::pair<std::uint64_t, int>;  // (run.seed, run.replicate)
+
 struct PointStatistics {
   std::size_t n_runs = 0;
   std::string scenario_name;        // of the first run
@@ -109,6 +113,9 @@ struct PointStatistics {
 
   // Per-run flow rates (particles/s; runs where the rate is undefined are left out) and their statistics.
   std::vector<double> j_paper_values, j_flowing_values, j_mid_values;
+  // Which run each of those values came from: (run.seed, run.replicate), in the same order. Runs of
+  // two points with one key share their particle sets (common/random.hpp): studies/paired.hpp pairs them.
+  std::vector<ReplicateKey> j_paper_keys, j_flowing_keys, j_mid_keys;
   SampleStatistics j_paper, j_flowing, j_mid;
 
   AvalancheStatistics avalanches;
@@ -135,14 +142,27 @@ RegimeFractions regime_fractions(const std::vector<RunRecord>& runs, double majo
 
 PointStatistics analyze_point(const std::vector<RunRecord>& runs, const AnalysisOptions& opt = {});
 
-// "J with obstruction > J without": ratio of mean J of `point` to that of `baseline` with a
-// bootstrap interval, Welch's t-test, and a verdict from the interval (statistics.hpp).
+// "J with obstruction > J without": ratio of mean J of `point` to that of `baseline`.
+// Paired (Pairing::when_exact; [report] pairing = "paired"): when the runs with the chosen J defined have
+// exactly the same (run.seed, run.replicate) keys at both points, replicate r of the point and
+// replicate r of the baseline shared their particle sets, and the comparison is the paired one
+// (Fieller interval + paired t-test, common/paired_ratio.hpp; RatioComparison::paired is set).
+// Otherwise, and always with Pairing::never (the default: measured pair correlations are ~0,
+// README "Paired comparisons"): the independent-sample comparison (bootstrap
+// interval + Welch's t-test, statistics.hpp). studies/paired.hpp has both side by side.
 // Only runs where the chosen J is defined enter: J_paper exists only when every particle
 // passed, so a point whose runs often clog permanently looks better than it is under
 // JKind::paper -- check PointStatistics::all_passed_fraction (or regime) next to the verdict.
 enum class JKind { paper, flowing, mid };
+enum class Pairing { when_exact, never };
 const char* to_string(JKind k);
+// The J statistics, values and their runs' keys of one kind.
+const SampleStatistics& j_stats(const PointStatistics& s, JKind k);
+const std::vector<double>& j_values(const PointStatistics& s, JKind k);
+const std::vector<ReplicateKey>& j_keys(const PointStatistics& s, JKind k);
+
 RatioComparison compare_to_baseline(const PointStatistics& point, const PointStatistics& baseline,
-                                    JKind kind = JKind::paper, const BootstrapOptions& opt = {});
+                                    JKind kind = JKind::paper, const BootstrapOptions& opt = {},
+                                    Pairing pairing = Pairing::never);
 
 }  // namespace gapflow

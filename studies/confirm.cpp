@@ -6,15 +6,11 @@
 
 namespace gapflow {
 
-namespace {
-
-std::optional<double> j_of(const RunRecord& r, const std::string& kind) {
+std::optional<double> run_j(const RunRecord& r, const std::string& kind) {
   if (kind == "flowing") return r.j_flowing;
   if (kind == "mid") return r.j_mid;
   return r.j_paper;
 }
-
-}  // namespace
 
 std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::vector<StoredRun>& runs) {
   std::set<std::string> screen_models;
@@ -29,7 +25,7 @@ std::vector<RankedPoint> rank_screened_points(const StudyDef& study, const std::
     p.point = r.id.point;
     p.point_label = r.id.point_label;
     ++p.runs;
-    if (auto j = j_of(r.record, study.confirm.rank_by)) {
+    if (auto j = run_j(r.record, study.confirm.rank_by)) {
       sums[k].first += *j;
       sums[k].second += 1;
     }

@@ -7,9 +7,14 @@
 #include "studies/store.hpp"
 #include "studies/study.hpp"
 
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace gapflow {
+
+// A run's J of one kind ("paper" | "flowing" | "mid", as in the study file); nullopt where undefined.
+std::optional<double> run_j(const RunRecord& r, const std::string& kind);
 
 struct RankedPoint {
   std::string series;

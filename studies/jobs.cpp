@@ -190,13 +190,15 @@ double count_jobs(const StudyDef& study) {
         const std::size_t n = a.values.size(), thin = static_cast<std::size_t>(std::max(1, thin_for(study, model)));
         points *= static_cast<double>((n + thin - 1) / thin + ((n - 1) % thin != 0 ? 1 : 0));
       }
-      total += points * replicates_for(study, model);
+      total += points * max_replicates_for(study, model);
     }
   if (study.confirm.enabled) total += static_cast<double>(study.confirm.top) * study.confirm.replicates;
   return total;
 }
 
-std::vector<Job> expand_jobs(const StudyDef& study) {
+std::vector<Job> expand_jobs(const StudyDef& study) { return expand_jobs(study, {}); }
+
+std::vector<Job> expand_jobs(const StudyDef& study, const ReplicateCounts& counts) {
   // Checked before anything is allocated: a billion replicates must fail at once, not after minutes.
   if (const double n = count_jobs(study); n > static_cast<double>(kMaxStudyJobs))
     throw ScenarioError({study.file.string(), 0, 0}, "", "",
@@ -212,7 +214,9 @@ std::vector<Job> expand_jobs(const StudyDef& study) {
       const PointSpec spec = point_spec(study, s, p);
       for (ModelKind model : study.models) {
         if (!kept_by_thinning(s, p, thin_for(study, model))) continue;
-        for (int r = 0; r < replicates_for(study, model); ++r) {
+        const auto raised = counts.find({s.label, p.index, to_string(model)});
+        const int n = raised != counts.end() ? raised->second : replicates_for(study, model);
+        for (int r = 0; r < n; ++r) {
           Job job = make_job(study, s, text, p, spec, model, r);
           check_unique(first_of_key, jobs, job, spec, study.file.string());
           jobs.push_back(std::move(job));

@@ -10,7 +10,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace gapflow {
@@ -52,6 +54,10 @@ std::string job_key(std::uint64_t scenario_hash, ModelKind kind);
 // ScenarioError located in the study file when the culprit is one of its
 // overrides (else in the scenario file), naming the series and the point.
 std::vector<Job> expand_jobs(const StudyDef& study);
+// The same with some points' replicate counts raised (sequential replication, studies/sequential.hpp):
+// (series label, point index, model "2d"|"3d") -> replicates 0 .. n-1; points not listed run the study's.
+using ReplicateCounts = std::map<std::tuple<std::string, int, std::string>, int>;
+std::vector<Job> expand_jobs(const StudyDef& study, const ReplicateCounts& counts);
 
 // The jobs of one point of one series for replicates [first, last), with expand_jobs' keys:
 // what an adaptive study adds round by round (studies/screen.cpp). Throws like expand_jobs.

@@ -49,7 +49,7 @@ std::string node_text(const toml::node& n) {
   return os.str();
 }
 
-const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max"};
+const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max", "pairing"};
 
 std::string read_text(const toml::table& t, const std::string& source, const char* key) {
   const toml::node* n = t.get(key);
@@ -98,12 +98,14 @@ ReportOptions read_report_table(const toml::table& t, const std::string& source)
     if (std::find(kReportKeys.begin(), kReportKeys.end(), k.str()) == kReportKeys.end())
       throw ScenarioError(where_of(source, n), "report." + std::string(k.str()), node_text(n),
                           "unknown key; allowed in [report]: kind, baseline, "
-                          "j, fit_w_min, fit_w_max");
+                          "j, fit_w_min, fit_w_max, pairing");
   ReportOptions o;
   if (const toml::node* k = t.get("kind")) o.kinds = read_kinds(*k, source);
   if (t.get("baseline")) o.baseline = read_text(t, source, "baseline");
   if (const toml::node* j = t.get("j"))
     o.j = choose<JKind>(*j, source, "j", {{"paper", JKind::paper}, {"flowing", JKind::flowing}, {"mid", JKind::mid}});
+  if (const toml::node* q = t.get("pairing"))
+    o.pairing = choose<Pairing>(*q, source, "pairing", {{"unpaired", Pairing::never}, {"paired", Pairing::when_exact}});
   if (t.get("fit_w_min")) o.fit_w_min = read_number(t, source, "fit_w_min");
   if (t.get("fit_w_max")) o.fit_w_max = read_number(t, source, "fit_w_max");
   if (o.fit_w_max < o.fit_w_min)
@@ -287,7 +289,7 @@ void compare_with_baseline(ReportData& d, const AnalysisOptions& opt) {
     if (is_baseline(d, p)) continue;
     const ReportPoint* b = baseline_for(d, p);
     if (!b) continue;
-    p.vs_baseline = compare_to_baseline(p.stats, b->stats, d.study.report.j, opt.bootstrap);
+    p.vs_baseline = compare_to_baseline(p.stats, b->stats, d.study.report.j, opt.bootstrap, d.study.report.pairing);
     p.baseline_label = b->series + (b->point_label.empty() ? "" : " " + b->point_label);
   }
 }
@@ -335,12 +337,6 @@ const ReportPoint* baseline_for(const ReportData& data, const ReportPoint& p) {
   return nullptr;
 }
 
-const SampleStatistics& j_stats(const PointStatistics& s, JKind k) {
-  return k == JKind::paper ? s.j_paper : k == JKind::flowing ? s.j_flowing : s.j_mid;
-}
-const std::vector<double>& j_values(const PointStatistics& s, JKind k) {
-  return k == JKind::paper ? s.j_paper_values : k == JKind::flowing ? s.j_flowing_values : s.j_mid_values;
-}
 
 MeanCI mean_ci(const Summary& s) {
   MeanCI m;

@@ -16,6 +16,7 @@
 //   j = "paper"                # "paper" | "flowing" | "mid": the J the analyses use
 //   fit_w_min = 2.0            # flow_vs_gap: W/d range of the Beverloo fits (inclusive)
 //   fit_w_max = 12.0
+//   pairing = "unpaired"       # or "paired": J/J_0 paired by replicate where the replicate sets match
 // Files: report.cpp (options, collection), report_tables.cpp (tables, CSV),
 // report_experiments.cpp (the analyses), report_sections.cpp (their text, tables, plots),
 // report_plots.cpp (plot spec, running Python), report_output.cpp (report.md, make_report).
@@ -46,6 +47,7 @@ struct ReportOptions {
   std::vector<ReportKind> kinds;  // in the order written; empty = generic outputs only
   std::string baseline;           // series label; "" = no baseline
   JKind j = JKind::paper;
+  Pairing pairing = Pairing::never;  // "paired": J/J_0 paired by replicate where the sets match (studies/paired.hpp)
   double fit_w_min = -std::numeric_limits<double>::infinity();
   double fit_w_max = std::numeric_limits<double>::infinity();
 };
@@ -110,9 +112,7 @@ ReportData collect_report_data(const std::vector<StoredRun>& runs, StudyInfo inf
 const ReportPoint* baseline_for(const ReportData& data, const ReportPoint& p);
 bool is_baseline(const ReportData& data, const ReportPoint& p);
 
-// The J statistics/values of one kind.
-const SampleStatistics& j_stats(const PointStatistics& s, JKind k);
-const std::vector<double>& j_values(const PointStatistics& s, JKind k);
+// j_stats, j_values: studies/analysis.hpp.
 
 // A mean with its Student-t 95 % interval; NaN where undefined (n = 0: all; n = 1: the interval).
 struct MeanCI {
@@ -358,5 +358,7 @@ std::string render_report_markdown(const MarkdownInput& in);
 // `out`, warnings to `log`. Throws std::invalid_argument for a missing store or
 // an empty one, ScenarioError for a bad study file.
 ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::ostream& log);
+// The analysed points alone (what make_report starts from; e.g. `gapflow report --pairing`).
+ReportData load_report_data(const ReportRequest& request, std::ostream& log);
 
 }  // namespace gapflow

@@ -86,7 +86,7 @@ DistanceResult distance_result(const ReportData& data, const std::string& series
   for (const ReportPoint* p : pts) {
     const ReportPoint* ref = baseline_for(data, *p);
     if (!ref) continue;
-    const RatioComparison c = compare_to_baseline(p->stats, ref->stats, opt.j);
+    const RatioComparison c = compare_to_baseline(p->stats, ref->stats, opt.j, {}, opt.pairing);
     by_d.emplace_back(p->stats.distance_over_d, c.verdict);
     if (c.verdict != Verdict::insufficient_data) ++r.n_compared;
   }
@@ -98,7 +98,7 @@ DistanceResult distance_result(const ReportData& data, const std::string& series
   r.peak = mean_ci(j_stats(peak->stats, opt.j).t);
   if (const ReportPoint* ref = baseline_for(data, *peak)) {
     r.baseline = mean_ci(j_stats(ref->stats, opt.j).t);
-    r.peak_gain = compare_to_baseline(peak->stats, ref->stats, opt.j);
+    r.peak_gain = compare_to_baseline(peak->stats, ref->stats, opt.j, {}, opt.pairing);
   }
   return r;
 }

@@ -245,6 +245,12 @@ void print_experiment(std::ostream& out, const ExperimentSection& e) {
 
 }  // namespace
 
+ReportData load_report_data(const ReportRequest& request, std::ostream& log) {
+  const fs::path db = store_file(request.results);
+  const StudyInfo info = request.study ? read_study_info(*request.study) : recorded_study_info(db, log);
+  return collect_report_data(load_runs(db, info), info);
+}
+
 ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::ostream& log) {
   const fs::path db = store_file(request.results);
   const StudyInfo info = request.study ? read_study_info(*request.study) : recorded_study_info(db, log);

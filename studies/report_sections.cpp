@@ -115,8 +115,9 @@ std::string distance_sentence(const DistanceResult& r, JKind j) {
   s += fmt::format("{} peaks at D/d = {} ({}) with {} = {} /s", to_string(j), fmt_num(r.peak_d_over_d, 3),
                    r.peak_label.empty() ? "single point" : r.peak_label, to_string(j), fmt_mean_ci(r.peak));
   if (!r.peak_gain) return s + "; no baseline to compare with.";
-  s += fmt::format("; J_max/J_0 = {} ({}, Welch p = {}).", ratio_text(*r.peak_gain), to_string(r.peak_gain->verdict),
-                   fmt_num(r.peak_gain->welch.p_two_sided, 3));
+  s += fmt::format("; J_max/J_0 = {} ({}, {} p = {}).", ratio_text(*r.peak_gain), to_string(r.peak_gain->verdict),
+                   r.peak_gain->paired ? "paired by replicate, paired t" : "Welch",
+                   fmt_num(r.peak_gain->p_value(), 3));
   auto where = [](const std::vector<DistanceRange>& rs, const char* side) {
     return rs.empty() ? fmt::format("nowhere significantly {} J_0", side)
                       : fmt::format("significantly {} J_0 at D/d = {}", side, ranges_text(rs));
@@ -130,7 +131,7 @@ PlotFigure ratio_figure(const ReportData& data, const ReportOptions& opt) {
   PlotFigure f{"ratio_vs_D_over_d.png",
                fmt::format("{} / {} of the baseline '{}'", to_string(opt.j), to_string(opt.j), opt.baseline),
                "D/d",
-               "J/J_0 (95% bootstrap CI)",
+               "J/J_0 (95% CI: bootstrap, or Fieller where paired)",
                {},
                {{"J = J_0", "", 1.0, 1.0, 1.0}},
                false};
@@ -146,7 +147,7 @@ PlotFigure ratio_figure(const ReportData& data, const ReportOptions& opt) {
     for (const ReportPoint* p : pts) {
       const ReportPoint* ref = baseline_for(data, *p);
       if (!ref) continue;
-      const RatioComparison c = compare_to_baseline(p->stats, ref->stats, opt.j);
+      const RatioComparison c = compare_to_baseline(p->stats, ref->stats, opt.j, {}, opt.pairing);
       if (!std::isfinite(c.ratio)) continue;
       l.x.push_back(p->stats.distance_over_d), l.y.push_back(c.ratio);
       l.ylo.push_back(c.ratio_ci.lo), l.yhi.push_back(c.ratio_ci.hi);
@@ -175,11 +176,15 @@ ExperimentSection flow_vs_distance_section(const ReportData& data, const ReportO
                     "mean {} is compared to J_0 as the ratio of means with a 95 % "
                     "percentile bootstrap interval; "
                     "\"significantly above\" means the interval lies above 1 AND Welch's "
-                    "t-test gives p < 0.05 (both must agree; below likewise). "
+                    "t-test gives p < 0.05 (both must agree; below likewise). With [report] pairing = \"paired\", where the runs with {} have "
+                    "exactly the same replicates at the point and at J_0 (same seeds, so the same particle "
+                    "sets), the comparison is paired instead: Fieller's interval of the ratio of paired means, "
+                    "whose verdict is the paired t-test's (marked 'paired' in the tables; points.csv "
+                    "ratio_method). "
                     "The peak is the point of largest mean {} among the points where every run has it "
                     "(J_paper: the board emptied). At a point where only some runs emptied, the mean and the "
                     "verdict use those runs alone and read high: check the 'all passed' column.",
-                    to_string(a.j), a.baseline, to_string(a.j), to_string(a.j)));
+                    to_string(a.j), a.baseline, to_string(a.j), to_string(a.j), to_string(a.j)));
   }
   TextTable t;
   t.title = "Peak and significant ranges (D/d)";

@@ -4,6 +4,7 @@
 #include "common/text_file.hpp"
 #include "studies/confirm.hpp"
 #include "studies/jobs.hpp"
+#include "studies/sequential.hpp"
 #include "view/run_outputs.hpp"
 
 #include <fmt/format.h>
@@ -247,6 +248,7 @@ std::map<std::string, Job> jobs_by_key(const StudyDef& study, const std::vector<
     return out;
   }
   add(expand_jobs(study));
+  if (study.sequential.enabled) add(expand_jobs(study, stored_replicate_counts(runs)));  // the rounds' runs too
   if (study.quick.present) add(expand_jobs(apply_quick(study)));
   if (study.confirm.enabled) add(confirm_jobs(study, rank_screened_points(study, runs)));
   return out;

@@ -142,7 +142,7 @@ std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_base
   if (with_baseline) {
     if (p.vs_baseline && std::isfinite(p.vs_baseline->ratio)) {
       const RatioComparison& r = *p.vs_baseline;
-      row.push_back(fmt_num(r.ratio, 3) + " " + fmt_interval(r.ratio_ci, 3));
+      row.push_back(fmt_num(r.ratio, 3) + " " + fmt_interval(r.ratio_ci, 3) + (r.paired ? " paired" : ""));
       row.push_back(to_string(r.verdict));
     } else {
       row.push_back("n/a");
@@ -289,6 +289,10 @@ void baseline_columns(CsvRow& row, const ReportPoint& p) {
   row.num("ratio_hi", r ? r->ratio_ci.hi : kNaN);
   row.num("welch_p", r ? r->welch.p_two_sided : kNaN);
   row.text("verdict", r ? to_string(r->verdict) : "");
+  // Appended last: the columns before keep their places. paired: Fieller + paired t (studies/paired.hpp).
+  row.text("ratio_method", r ? (r->paired ? "paired" : "unpaired") : "");
+  row.num("paired_t_p", r && r->paired ? r->paired_t.p_two_sided : kNaN);
+  row.num("pair_correlation", r && r->paired ? r->correlation : kNaN);
 }
 
 CsvRow csv_row(const ReportData& data, const ReportPoint& p, std::vector<std::string>& header, bool header_pass) {

@@ -25,14 +25,16 @@ namespace {
 
 // The keys each table allows.
 const std::vector<std::string> kRootKeys{"study", "series", "per_model", "quick", "confirm", "report", "screen"};
-const std::vector<std::string> kStudyKeys{"name", "description", "replicates", "models", "seed", "set"};
+const std::vector<std::string> kStudyKeys{"name",       "description", "replicates",
+                                          "models",     "seed",        "set",
+                                          "replicates_target_halfwidth", "replicates_max", "replicates_batch"};
 const std::vector<std::string> kSeriesKeys{"label", "scenario", "set", "sweep"};
 const std::vector<std::string> kSweepKeys{"key", "values", "from", "to", "step"};
 const std::vector<std::string> kQuickKeys{"replicates", "models", "thin"};
 const std::vector<std::string> kPlanKeys{"replicates", "thin"};
 const std::vector<std::string> kModelNames{"2d", "3d"};
 const std::vector<std::string> kConfirmKeys{"model", "top", "replicates", "rank_by", "set"};
-const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max"};
+const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max", "pairing"};
 const std::vector<std::string> kJKinds{"paper", "flowing", "mid"};
 const std::vector<std::string> kReportKinds{"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"};
 
@@ -188,6 +190,16 @@ ModelPlan read_plan(StrictTable t) {
   return m;
 }
 
+// A model's own minimum under sequential replication: within [kMinSequentialReplicates, replicates_max].
+void check_sequential_plan(const StudyDef& d, const ModelPlan& m, StrictTable t) {
+  if (!d.sequential.enabled || !m.replicates) return;
+  if (*m.replicates < kMinSequentialReplicates || *m.replicates > d.sequential.max_replicates)
+    t.fail("replicates", *t.get("replicates"),
+           fmt::format("with [study] replicates_target_halfwidth, must be >= {} (the minimum before the first look) "
+                       "and <= replicates_max ({})",
+                       kMinSequentialReplicates, d.sequential.max_replicates));
+}
+
 std::string one_of(StrictTable& t, std::string_view key, const std::vector<std::string>& allowed,
                    const std::string& fallback) {
   auto v = t.text(key);
@@ -226,10 +238,40 @@ ReportDef read_report(StrictTable t) {
   }
   if (auto b = t.text("baseline", true)) r.baseline = *b;
   r.j = one_of(t, "j", kJKinds, r.j);
+  r.pairing = one_of(t, "pairing", {"unpaired", "paired"}, r.pairing);
   for (const char* k : {"fit_w_min", "fit_w_max"})  // read by the report (studies/report.cpp)
     if (const toml::node* n = t.get(k); n && !(number_value(*n) && std::isfinite(*number_value(*n))))
       t.fail(k, *n, "must be a finite number (W/d)");
   return r;
+}
+
+// Sequential replication: replicates is the minimum, replicates_max the cap (studies/sequential.hpp).
+void read_sequential(StrictTable& t, StudyDef& d) {
+  SequentialDef& q = d.sequential;
+  const auto target = t.number("replicates_target_halfwidth", 0, 1);
+  if (!target) {
+    for (const char* k : {"replicates_max", "replicates_batch"})
+      if (const toml::node* n = t.get(k))
+        t.fail(k, *n, "only with replicates_target_halfwidth (sequential replication)");
+    return;
+  }
+  if (!(*target > 0)) t.fail("replicates_target_halfwidth", *t.get("replicates_target_halfwidth"),
+                             "must be a number in (0, 1]: the relative half-width, e.g. 0.02 for +-2 %");
+  q.enabled = true;
+  q.target_halfwidth = *target;
+  const auto max = t.integer("replicates_max", 1, kMaxReplicates);
+  if (!max) t.missing("replicates_max", "required with replicates_target_halfwidth: the cap per point, e.g. 40");
+  q.max_replicates = static_cast<int>(*max);
+  if (auto b = t.integer("replicates_batch", 1, kMaxReplicates)) q.batch = static_cast<int>(*b);
+  if (d.replicates < kMinSequentialReplicates) {
+    const toml::node* r = t.get("replicates");
+    t.fail(r ? "replicates" : "replicates_target_halfwidth", r ? *r : *t.get("replicates_target_halfwidth"),
+           fmt::format("with replicates_target_halfwidth, replicates (the minimum before the first look) must be "
+                       ">= {}: fewer makes stopping on a narrow interval bias it",
+                       kMinSequentialReplicates));
+  }
+  if (q.max_replicates < d.replicates)
+    t.fail("replicates_max", *t.get("replicates_max"), fmt::format("must be >= replicates ({})", d.replicates));
 }
 
 void read_study_section(StrictTable t, StudyDef& d) {
@@ -243,6 +285,7 @@ void read_study_section(StrictTable t, StudyDef& d) {
   d.models = read_models(t);
   if (auto seed = t.integer("seed", 0)) d.seed = static_cast<std::uint64_t>(*seed);
   d.set = read_set(t);
+  read_sequential(t, d);
 }
 
 }  // namespace
@@ -264,6 +307,10 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
     d.series.push_back(std::move(s));
   }
   if (const toml::table* sc = root.table("screen")) {
+    if (d.sequential.enabled)  // the screen decides its own replicates round by round
+      throw ScenarioError(location_of(source, *study->get("replicates_target_halfwidth")),
+                          "study.replicates_target_halfwidth", toml_text(*study->get("replicates_target_halfwidth")),
+                          "not allowed beside [screen]: the screen allocates replicates by its own rounds");
     read_screen(doc, *sc, source, base_dir, d);
     for (const SeriesDef& s : d.series) labels.insert(s.label);
   }
@@ -271,8 +318,10 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
   if (const toml::table* pm = root.table("per_model")) {
     StrictTable plans(pm, "per_model", source, kModelNames);
     for (const std::string& name : kModelNames)
-      if (const toml::table* t = plans.table(name))
+      if (const toml::table* t = plans.table(name)) {
         d.per_model[parse_model_kind(name)] = read_plan(StrictTable(t, "per_model." + name, source, kPlanKeys));
+        check_sequential_plan(d, d.per_model[parse_model_kind(name)], StrictTable(t, "per_model." + name, source, kPlanKeys));
+      }
   }
   if (const toml::table* q = root.table("quick")) d.quick = read_quick(StrictTable(q, "quick", source, kQuickKeys));
   if (const toml::table* c = root.table("confirm"))
@@ -308,6 +357,11 @@ int replicates_for(const StudyDef& study, ModelKind model) {
   return it != study.per_model.end() && it->second.replicates ? *it->second.replicates : study.replicates;
 }
 
+int max_replicates_for(const StudyDef& study, ModelKind model) {
+  const int min = replicates_for(study, model);
+  return study.sequential.enabled ? std::max(min, study.sequential.max_replicates) : min;
+}
+
 int thin_for(const StudyDef& study, ModelKind model) {
   auto it = study.per_model.find(model);
   return it != study.per_model.end() ? it->second.thin : 1;
@@ -318,6 +372,7 @@ StudyDef apply_quick(StudyDef study) {
   if (study.quick.models) study.models = *study.quick.models;
   if (study.quick.replicates) study.confirm.replicates = std::min(study.confirm.replicates, *study.quick.replicates);
   study.per_model.clear();  // --quick: one budget for every model
+  study.sequential = {};     // --quick: a fixed count, a first look (README "Sequential replication")
   for (SeriesDef& s : study.series)
     for (SweepAxis& a : s.axes) a.values = thin_values(a.values, study.quick.thin);
   return study;

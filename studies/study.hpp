@@ -3,7 +3,8 @@
 // unknown keys, wrong types and bad values are ScenarioErrors that say
 // file:line:column, the key, the value and what is allowed.
 //
-//   [study]     name, description, replicates, models, seed, set
+//   [study]     name, description, replicates, models, seed, set,
+//               replicates_target_halfwidth, replicates_max, replicates_batch (sequential replication)
 //   [[series]]  label, scenario (relative to the study file), set
 //     [[series.sweep]]  key + values, or key + from/to/step (inclusive)
 //   [per_model.2d] / [per_model.3d]  replicates, thin  (a model's own budget: the 3D
@@ -11,7 +12,7 @@
 //               coarser grid; its points keep their indices in the full grid)
 //   [quick]     replicates, models, thin  (what --quick changes)
 //   [confirm]   model, top, replicates, rank_by, set  (screen -> confirm)
-//   [report]    kind (string or list), baseline, j
+//   [report]    kind (string or list), baseline, j, pairing
 //   [screen]    a racing screen over shape x size x D x W instead of [[series]] (studies/screen_def.hpp)
 #pragma once
 
@@ -87,6 +88,19 @@ struct ReportDef {
   std::vector<std::string> kinds;  // flow_vs_gap, flow_vs_distance, clogging, models, screen_confirm
   std::string baseline;            // series label of the no-obstruction reference ("" = none)
   std::string j = "paper";         // J used by the analyses: paper | flowing | mid
+  std::string pairing = "unpaired"; // J/J_0: unpaired | paired (by replicate where the sets match; studies/paired.hpp)
+};
+
+// [study] replicates_target_halfwidth: sequential replication (studies/sequential.hpp). Each point
+// runs `replicates` (the minimum, >= kMinSequentialReplicates), then batches of `batch` more while
+// the Student-t 95 % interval of its mean J (the [report] j) is wider than +-target_halfwidth x
+// mean, up to max_replicates.
+inline constexpr int kMinSequentialReplicates = 10;
+struct SequentialDef {
+  bool enabled = false;
+  double target_halfwidth = 0;  // relative half-width (0.02 = +-2 % of the mean), dimensionless
+  int max_replicates = 0;       // cap per point and model (replicates_max)
+  int batch = 5;                // replicates added per round to a point still too wide (replicates_batch)
 };
 
 struct StudyDef {
@@ -102,6 +116,7 @@ struct StudyDef {
   QuickDef quick;
   ConfirmDef confirm;
   ReportDef report;
+  SequentialDef sequential;
   std::optional<ScreenDef> screen;  // [screen]: series made from its grid, run round by round (studies/screen.hpp)
 };
 
@@ -122,5 +137,7 @@ bool thin_keeps(std::size_t i, std::size_t n, int thin);
 // The replicates and thinning `model` runs with (its [per_model] entry, else the study's).
 int replicates_for(const StudyDef& study, ModelKind model);
 int thin_for(const StudyDef& study, ModelKind model);
+// The most replicates `model` may run per point: replicates_for, or the sequential cap when larger.
+int max_replicates_for(const StudyDef& study, ModelKind model);
 
 }  // namespace gapflow
