@@ -5,12 +5,14 @@
 #include "common/random.hpp"
 #include "common/statistics.hpp"
 #include "common/steady_state.hpp"
+#include "studies/steady_analysis.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <sstream>
 
 using namespace gapflow;
 
@@ -199,4 +201,50 @@ TEST(SteadyState, SlowCorrelationLengthensTheBatches) {
   }
   RecordProperty("lengthened", lengthened);
   EXPECT_GE(lengthened, runs / 2);
+}
+
+// The report's pooled J_steady (studies/steady_analysis.hpp): one run gives its own estimate back;
+// two runs give total crossings / total window, with an interval narrower than either's.
+TEST(SteadyState, PointStatisticsPoolRunsByWindow) {
+  RandomStream rs(0x9001);
+  std::vector<RunRecord> runs(2);
+  for (int i = 0; i < 2; ++i) {
+    RunRecord& r = runs[static_cast<std::size_t>(i)];
+    r.sim_time_s = 100.0 * (i + 1);
+    r.reinjected = 1;
+    const std::vector<double> t = piecewise_poisson(rs, r.sim_time_s, 1.0, [](double) { return 40.0; });
+    for (std::size_t k = 0; k < t.size(); ++k) r.crossings.push_back({static_cast<int>(k), t[k], 0.0});
+  }
+  const auto one = steady_point_statistics({runs[0]});
+  const auto e0 = steady_state_of(runs[0]), e1 = steady_state_of(runs[1]);
+  ASSERT_TRUE(one && e0 && e1 && e0->valid && e1->valid);
+  EXPECT_NEAR(one->j_per_s, e0->j_per_s, 1e-12);
+  EXPECT_NEAR(one->half_width_per_s, e0->half_width_per_s, 1e-9);
+  const auto both = steady_point_statistics(runs);
+  ASSERT_TRUE(both);
+  EXPECT_EQ(both->n_valid, 2u);
+  EXPECT_NEAR(both->j_per_s, (e0->crossings + e1->crossings) / (e0->window_s + e1->window_s), 1e-12);
+  EXPECT_LT(both->half_width_per_s, std::min(e0->half_width_per_s, e1->half_width_per_s));
+  RunRecord drained = runs[0];
+  drained.reinjected = 0;
+  EXPECT_FALSE(steady_point_statistics({drained}).has_value());
+}
+
+// What users see: the summary's "J (steady)" line and the JSON fields, for re-injected runs only.
+TEST(SteadyState, SummaryAndJsonShowItForReinjectedRunsOnly) {
+  RunRecord r;
+  r.sim_time_s = 60;
+  for (int i = 0; i < 3000; ++i) r.crossings.push_back({i, 0.02 * (i + 0.5), 0.0});
+  std::ostringstream summary, json;
+  write_summary(summary, r);
+  write_json(json, r);
+  EXPECT_EQ(summary.str().find("J (steady)"), std::string::npos);
+  EXPECT_EQ(json.str().find("j_steady_per_s"), std::string::npos);
+  r.reinjected = 2500;
+  summary.str(""), json.str("");
+  write_summary(summary, r);
+  write_json(json, r);
+  EXPECT_NE(summary.str().find("J (steady)       50.00 /s +- "), std::string::npos) << summary.str();
+  EXPECT_NE(json.str().find("\"j_steady_per_s\""), std::string::npos);
+  EXPECT_NE(json.str().find("\"half_width_95_per_s\""), std::string::npos);
 }
