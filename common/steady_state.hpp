@@ -14,7 +14,10 @@
 //     the truncation is the d that minimises it, searched over d <= m/2 only: near the end
 //     the statistic rests on a handful of batches and its minimum means nothing (White et
 //     al. 2000). A minimum at that bound means the transient was not seen to end
-//     (transient_at_limit): the run was too short.
+//     (transient_at_limit): the run was too short. Known weakness: a clog early in the run
+//     looks like a slow start to MSER and can be cut off with the transient, leaving fewer
+//     clogs in the window than the process has (results/steady_state: 300-sphere run); the
+//     fix to try is MSER on the flowing bins only, clog intervals left out.
 //  3. Window: from the truncation time to the end of the run. J_steady = crossings in the
 //     window / window length. Clogs inside the window are INCLUDED (their time counts, no
 //     crossings): J_steady is throughput, particles per second of running, the steady-state
