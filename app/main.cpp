@@ -21,6 +21,7 @@
 #include "common/geometry.hpp"
 #include "common/scenario_loader.hpp"
 #include "common/statistics.hpp"
+#include "common/steady_state.hpp"
 #include "common/text_file.hpp"
 #include "common/units.hpp"
 
@@ -98,7 +99,7 @@ std::vector<RunRecord> run_replicates(const ScenarioArgs& a, ModelKind kind, int
 void print_replicate_table(const std::vector<RunRecord>& records) {
   auto opt = [](const std::optional<double>& v) { return v ? fmt::format("{:9.2f}", *v) : std::string("      n/a"); };
   std::cout << "replicate  passed  escaped  J_paper/s  J_flow/s   J_mid/s  clogs  regime        sim_s  wall_s\n";
-  std::vector<double> jp, jf, jm;
+  std::vector<double> jp, jf, jm, js;
   for (const RunRecord& r : records) {
     std::cout << fmt::format("{:9d}  {:6d}  {:7d}  {}  {} {}  {:5d}  {:12s} {:6.1f}  {:6.1f}\n", r.replicate, r.passed,
                              r.escaped, opt(r.j_paper), opt(r.j_flowing), opt(r.j_mid), r.clogs.size(),
@@ -106,6 +107,7 @@ void print_replicate_table(const std::vector<RunRecord>& records) {
     if (r.j_paper) jp.push_back(*r.j_paper);
     if (r.j_flowing) jf.push_back(*r.j_flowing);
     if (r.j_mid) jm.push_back(*r.j_mid);
+    if (const auto e = steady_state_of(r); e && e->valid) js.push_back(e->j_per_s);  // re-injected runs only
   }
   const double d = records.front().diameter_m;
   auto line = [&](const char* name, const std::vector<double>& v) {
@@ -117,6 +119,7 @@ void print_replicate_table(const std::vector<RunRecord>& records) {
   line("J_paper", jp);
   line("J_flowing", jf);
   line("J_mid", jm);
+  if (!js.empty()) line("J_steady", js);  // interval over runs; each run's batch-means interval: --out or one run
 }
 
 int cmd_run(const ScenarioArgs& a, const std::string& model_name, const std::string& out_path, bool quiet,

@@ -1,5 +1,6 @@
 #include "common/run_record.hpp"
 
+#include "common/steady_state.hpp"
 #include "common/units.hpp"
 
 #include <fmt/format.h>
@@ -74,6 +75,30 @@ toml::array clogs_array(const std::vector<Clog>& cs) {
   return out;
 }
 
+// J_steady of a re-injected run (common/steady_state.hpp), derived from the crossings: the
+// same numbers whether the record comes from a run or from a store.
+void put_steady_state(toml::table& t, const RunRecord& r) {
+  const std::optional<SteadyStateEstimate> e = steady_state_of(r);
+  if (!e) return;
+  toml::table s{{"valid", e->valid}};
+  if (!e->valid) s.insert("why_not", e->why_not);
+  s.insert("truncation_s", e->truncation_s);
+  s.insert("transient_at_limit", e->transient_at_limit);
+  s.insert("window_s", e->window_s);
+  s.insert("crossings", e->crossings);
+  s.insert("clogged_s", e->clogged_s);
+  if (e->valid) {
+    t.insert("j_steady_per_s", e->j_per_s);
+    s.insert("j_per_s", e->j_per_s);
+    s.insert("half_width_95_per_s", e->half_width_per_s);
+    s.insert("batches", e->batches);
+    s.insert("batch_s", e->batch_s);
+    s.insert("lag1_autocorrelation", e->lag1_autocorrelation);
+    s.insert("autocorrelated", e->autocorrelated);
+  }
+  t.insert("steady_state", std::move(s));
+}
+
 }  // namespace
 
 void write_json(std::ostream& out, const RunRecord& r) {
@@ -111,6 +136,7 @@ void write_json(std::ostream& out, const RunRecord& r) {
   put_optional(t, "j_mid_per_s", r.j_mid);
   put_optional(t, "j_paper_star", r.j_paper_star());
   put_optional(t, "j_flowing_star", r.j_flowing_star());
+  put_steady_state(t, r);
   out << toml::json_formatter{t} << "\n";
 }
 
@@ -140,6 +166,7 @@ void write_summary(std::ostream& out, const RunRecord& r) {
   out << fmt::format("J (paper)     {}   [N / time for all to pass]\n", rate(r.j_paper, r.diameter_m));
   out << fmt::format("J (flowing)   {}   [clogs removed]\n", rate(r.j_flowing, r.diameter_m));
   out << fmt::format("J (10-90 %)   {}\n", rate(r.j_mid, r.diameter_m));
+  if (const std::optional<SteadyStateEstimate> e = steady_state_of(r)) out << steady_state_line(*e) << "\n";
   out << fmt::format("clogs         {} ended, {} unbroken at the end   avalanches {}\n", clogs_complete,
                      r.clogs.size() - clogs_complete, r.avalanches.size());
   out << fmt::format("time          {:.2f} s simulated in {:.2f} s wall = {:.2f} simulated s per wall s (dt = {:g} s)\n",

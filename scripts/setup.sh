@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libbenchmark-dev libbenchmark-tools
   libtomlplusplus-dev libcli11-dev libsqlite3-dev libfmt-dev libtbb-dev
   python3 python3-matplotlib
+  python3-scipy                # scripts/steady_vs_paper.py: Student-t quantile
   libopenmpi-dev openmpi-bin   # gapflow study --mpi (optional at build time)
   slurm-wlm munge              # scripts/slurm_local.sh: a one-node Slurm for the slow cluster test
   libcairo2-dev ffmpeg libcpp-httplib-dev   # view/ (snapshots, movies) and gapflow serve

@@ -280,6 +280,7 @@ ReportPoint make_point(const std::vector<const StoredRun*>& group, const Analysi
   std::vector<RunRecord> records;
   for (const StoredRun* r : group) records.push_back(r->record);
   p.stats = analyze_point(records, opt);
+  p.steady = steady_point_statistics(records);
   return p;
 }
 

@@ -24,6 +24,7 @@
 
 #include "common/fits.hpp"
 #include "studies/analysis.hpp"
+#include "studies/steady_analysis.hpp"
 #include "studies/store.hpp"
 #include "studies/study.hpp"
 
@@ -85,6 +86,7 @@ struct ReportPoint {
   std::vector<AxisEntry> axes;
   double d_mm = kNaN;  // nominal diameter of the first run
   PointStatistics stats;
+  std::optional<SteadyPointStatistics> steady;  // when its runs re-injected (studies/steady_analysis.hpp)
   // Against the baseline series (when one is defined and matches; see baseline_for).
   std::optional<RatioComparison> vs_baseline;
   std::string baseline_label;  // "<series> <point label>" of the reference point

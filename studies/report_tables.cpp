@@ -121,7 +121,21 @@ std::vector<JKind> other_kinds(JKind j) {
   return out;
 }
 
-std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_baseline) {
+bool any_steady(const ReportData& data) {
+  for (const ReportPoint& p : data.points)
+    if (p.steady) return true;
+  return false;
+}
+
+// J_steady of the re-injected runs, pooled (studies/steady_analysis.hpp).
+std::string fmt_steady(const std::optional<SteadyPointStatistics>& st) {
+  if (!st || st->n_valid == 0) return "n/a";
+  Interval ci = st->interval();
+  return fmt_num(st->j_per_s, 4) + " " + fmt_interval(ci, 4) +
+         (st->n_autocorrelated + st->n_transient_at_limit > 0 ? " (run longer)" : "");
+}
+
+std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_baseline, bool with_steady) {
   const PointStatistics& s = p.stats;
   const CensoredMean& av = s.avalanches.size;
   std::vector<std::string> row{
@@ -139,6 +153,7 @@ std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_base
                             fmt_clogs(s.clogs),
                             s.regime.label,
                         });
+  if (with_steady) row.push_back(fmt_steady(p.steady));
   if (with_baseline) {
     if (p.vs_baseline && std::isfinite(p.vs_baseline->ratio)) {
       const RatioComparison& r = *p.vs_baseline;
@@ -152,7 +167,7 @@ std::vector<std::string> point_row(const ReportPoint& p, JKind j, bool with_base
   return row;
 }
 
-std::vector<std::string> point_header(JKind j, bool with_baseline) {
+std::vector<std::string> point_header(JKind j, bool with_baseline, bool with_steady) {
   const std::string name = to_string(j);
   std::vector<std::string> h{"point",
                              "W/d",
@@ -165,6 +180,7 @@ std::vector<std::string> point_header(JKind j, bool with_baseline) {
                              };
   for (JKind k : other_kinds(j)) h.push_back(std::string(to_string(k)) + " /s [t 95%]");
   h.insert(h.end(), {name + "* [t 95%]", "<s> [95% CI]", "clogs", "regime"});
+  if (with_steady) h.push_back("steady /s [batch means 95%]");
   if (with_baseline) h.insert(h.end(), {"J/J_0 [95% CI]", "verdict"});
   return h;
 }
@@ -177,10 +193,10 @@ std::vector<TextTable> point_tables(const ReportData& data, JKind j) {
   for (const auto& [series, model] : series_models(data)) {
     TextTable t;
     t.title = fmt::format("series '{}', model {}", series, model);
-    t.header = point_header(j, with_baseline);
+    t.header = point_header(j, with_baseline, any_steady(data));
     const bool ref = !data.study.report.baseline.empty() && series == data.study.report.baseline;
     for (const ReportPoint* p : points_of(data, series, model))
-      t.rows.push_back(point_row(*p, j, with_baseline && !ref));
+      t.rows.push_back(point_row(*p, j, with_baseline && !ref, any_steady(data)));
     if (ref) t.notes.push_back("this series is the baseline (J_0)");
     out.push_back(std::move(t));
   }
@@ -281,6 +297,16 @@ void regime_and_decomposition_columns(CsvRow& row, const PointStatistics& s) {
   row.num("mean_wall_time_s", s.mean_wall_time_s);
 }
 
+void steady_columns(CsvRow& row, const ReportPoint& p) {
+  const SteadyPointStatistics* st = p.steady ? &*p.steady : nullptr;
+  row.count("J_steady_runs", st ? st->n_valid : 0);
+  row.num("J_steady_mean", st ? st->j_per_s : kNaN);
+  row.num("J_steady_lo", st ? st->interval().lo : kNaN);
+  row.num("J_steady_hi", st ? st->interval().hi : kNaN);
+  row.num("J_steady_truncation_s", st ? st->mean_truncation_s : kNaN);
+  row.num("J_steady_window_s", st ? st->total_window_s : kNaN);
+}
+
 void baseline_columns(CsvRow& row, const ReportPoint& p) {
   const RatioComparison* r = p.vs_baseline ? &*p.vs_baseline : nullptr;
   row.text("baseline", p.baseline_label);
@@ -317,6 +343,7 @@ CsvRow csv_row(const ReportData& data, const ReportPoint& p, std::vector<std::st
   j_columns(row, "J_mid", s.j_mid, s.j_star_factor);
   avalanche_and_clog_columns(row, s);
   regime_and_decomposition_columns(row, s);
+  if (any_steady(data)) steady_columns(row, p);
   if (!data.study.report.baseline.empty()) baseline_columns(row, p);
   return row;
 }
