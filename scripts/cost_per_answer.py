@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """CPU-seconds per answer from a study store (issue 15, item 6).
 
 Usage: scripts/cost_per_answer.py STORE --baseline SERIES --point SERIES --cpu-per-run S
@@ -12,7 +12,7 @@ Two answers, for the protocol the store's runs used:
      particle sets), times 2 runs per replicate pair.
 The cv come from the store (sample standard deviation over the mean); the run-to-run spread of
 a sample of n runs is itself uncertain, so each cost carries the 95 % range that the chi-square
-interval of the standard deviation gives (Wilson-Hilferty quantiles). CPU per run is measured
+interval of the standard deviation gives (Debian's python3-scipy for the quantiles). CPU per run is measured
 by the caller (the store's wall times include waiting on a loaded machine).
 Prints one markdown table row per answer.
 """
@@ -21,22 +21,17 @@ import math
 import sqlite3
 import statistics
 
-Z975, Z80 = 1.959964, 0.841621
+import scipy.stats
+
+Z975, Z80 = float(scipy.stats.norm.ppf(0.975)), float(scipy.stats.norm.ppf(0.8))
 
 
 def t975(df):
-    # Cornish-Fisher expansion of the Student-t quantile around the normal one (error < 1e-3 for df >= 3).
-    z = Z975
-    g1 = (z**3 + z) / 4
-    g2 = (5 * z**5 + 16 * z**3 + 3 * z) / 96
-    g3 = (3 * z**7 + 19 * z**5 + 17 * z**3 - 15 * z) / 384
-    return z + g1 / df + g2 / df**2 + g3 / df**3
+    return float(scipy.stats.t.ppf(0.975, df))
 
 
 def chi2_quantile(p, df):
-    # Wilson-Hilferty: chi2_p ~ df (1 - 2/(9 df) + z_p sqrt(2/(9 df)))^3.
-    z = statistics.NormalDist().inv_cdf(p)
-    return df * (1 - 2 / (9 * df) + z * math.sqrt(2 / (9 * df))) ** 3
+    return float(scipy.stats.chi2.ppf(p, df))
 
 
 def sd_range(n):

@@ -36,7 +36,7 @@ cpu=$(python3 -c "print(f'{($cpu0 + $cpu1) / 2:.2f}')")
   echo
   echo "| protocol | J_0 and run-to-run spread | CPU s per run | J_0 to ±2 % (95 %) | obstruction point | decide a 3 % difference (5 %, power 80 %) |"
   echo "|---|---|---:|---|---|---|"
-  python3 scripts/cost_per_answer.py "$db" --baseline none --point cylinder --cpu-per-run "$cpu" \
+  /usr/bin/python3 scripts/cost_per_answer.py "$db" --baseline none --point cylinder --cpu-per-run "$cpu" \
     --label "full discharge, J_paper (default step)"
 } > "$out/README.md.partial"
 mv "$out/README.md.partial" "$out/README.md"
