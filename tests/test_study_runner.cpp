@@ -779,3 +779,34 @@ TEST(StudyRunner, SigintExits130AndStoresOnlyCompleteRuns) {
   for (const StoredRun& r : Store(db).load())
     EXPECT_EQ(static_cast<int>(r.record.crossings.size()), r.record.passed) << "complete child rows " << r.id.key;
 }
+
+namespace {
+
+// A sweep that gains a value renumbers its points. Runs stored under the old numbering must take
+// the new one (gapflow study refreshes them before it runs): otherwise a report groups the runs
+// of value 40 (stored as point 1) with the new value 35 (now point 1).
+TEST(StudyStore, StoredRunsTakeTheStudysCurrentPointNumbering) {
+  TempDir dir;
+  const auto sweep = [](const std::string& values) {
+    return parse(study_text("replicates = 1\nset = [\"particles.count=20\"]",
+                            "[[series.sweep]]\nkey = \"bottleneck.gap_mm\"\nvalues = [" + values + "]\n"));
+  };
+  const std::vector<Job> before = expand_jobs(sweep("30, 40"));
+  Store store(dir / "s.sqlite");
+  for (const Job& j : before) store.put(j.id, sample_record());
+  const std::vector<Job> after = expand_jobs(sweep("30, 35, 40"));
+  ASSERT_EQ(after.size(), 3u);
+  EXPECT_EQ(after[2].id.key, before[1].id.key);  // value 40: same job, new index
+  std::vector<JobIdentity> ids;
+  for (const Job& j : after) ids.push_back(j.id);
+  EXPECT_EQ(store.refresh_identities(ids), 1u);  // only the run of value 40 moves
+  EXPECT_EQ(store.refresh_identities(ids), 0u);  // idempotent
+  for (const StoredRun& r : store.load()) {
+    const Job& now = r.id.key == after[0].id.key ? after[0] : after[2];
+    EXPECT_EQ(r.id.point, now.id.point) << r.id.point_label;
+    EXPECT_EQ(r.id.point_label, now.id.point_label);
+    EXPECT_EQ(r.id.axes_json, now.id.axes_json);
+  }
+}
+
+}  // namespace
