@@ -170,14 +170,6 @@ int cmd_study(const StudyCommands::Options& o) {
   Store store(db, StoreAccess::exclusive);  // a second study on this store refuses here
   // The report reads the study's [report] settings from the store (gapflow report RESULTS).
   if (const auto text = read_text_file(o.study_file)) store.record_study_file(study.name, o.study_file, *text);
-  // Stored runs take the point numbering of the study as it is now (a sweep that gained a value
-  // renumbers its points); a --quick run thins the axes and would renumber a full study's runs.
-  if (!o.quick) {
-    std::vector<JobIdentity> ids;
-    for (const Job& j : all_jobs) ids.push_back(j.id);
-    if (const std::size_t moved = store.refresh_identities(ids); moved > 0)
-      std::cerr << fmt::format("{} stored runs renumbered to the study's current points\n", moved);
-  }
   if (shard) {  // the whole job list, so that a merge of the shares can say which jobs are missing
     store.set_shard(shard->label());
     store.record_plan(plan_of(all_jobs, shard->count));

@@ -180,7 +180,8 @@ def linear_fit(points, series, key):
     """Weighted least squares of mean J against dt over one series: J = b0 + b1 dt.
 
     Returns (J0, J0 half-width, a = b1/b0 per second, a half-width, chi2, dof) with 95 % intervals
-    from the covariance of (b0, b1) scaled by max(1, chi2/dof) (delta method for the ratio)."""
+    from the covariance of (b0, b1) scaled by max(1, chi2/dof) (delta method for the ratio), with a
+    Student-t quantile (dof) when the scale was estimated (chi2/dof > 1)."""
     xs, ys, ws = [], [], []
     for (s, _), p in points.items():
         if s != series or len(p[key]) < 2:
@@ -205,14 +206,16 @@ def linear_fit(points, series, key):
     v00, v11, v01 = scale * sxx / det, scale * sw / det, -scale * sx / det
     a = b1 / b0
     va = a**2 * (v11 / b1**2 + v00 / b0**2 - 2 * v01 / (b0 * b1))
-    return b0, 1.96 * math.sqrt(v00), a, 1.96 * math.sqrt(va), chi2, dof
+    # A scale estimated from the residuals has dof degrees of freedom: Student-t then, not the normal.
+    q = t975(dof) if chi2 / dof > 1.0 else 1.96
+    return b0, q * math.sqrt(v00), a, q * math.sqrt(va), chi2, dof
 
 
 def print_fits(points, fits):
     if not fits:
         return
     print("\nFirst-order step error, J(dt) = J(0) (1 + a dt), weighted least squares over each series' steps "
-          "(95 % intervals, widened by sqrt(chi2/dof) when above 1):\n")
+          "(95 % intervals; when chi2/dof > 1 the covariance is widened by it and the quantile is Student-t with dof):\n")
     print("| series | J | J(0) /s | a (per ms) | error at 1 ms | error at 2 ms | chi2 / dof |")
     print("|---|---|---|---|---|---|---|")
     for series in fits:

@@ -244,7 +244,9 @@ const AxisEntry* ReportPoint::axis(std::string_view key) const {
 
 namespace {
 
-using PointKey = std::tuple<std::string, std::string, int>;  // series, model, point
+// series, model, axes (JSON): a point is what its runs were run at, not its index in the grid;
+// a sweep that gained or lost a value renumbers the grid, and runs stored before keep the old index.
+using PointKey = std::tuple<std::string, std::string, std::string>;
 
 std::vector<std::string> series_in_order(const std::vector<StoredRun>& runs, const StudyInfo& info) {
   std::set<std::string> present;
@@ -303,17 +305,25 @@ ReportData collect_report_data(const std::vector<StoredRun>& runs, StudyInfo inf
   d.study = std::move(info);
   add_totals(runs, d);
   std::map<PointKey, std::vector<const StoredRun*>> groups;
-  for (const StoredRun& r : runs) groups[{r.id.series, r.id.model, r.id.point}].push_back(&r);
+  std::map<PointKey, int> index;  // the smallest grid index the point's runs were stored under
+  for (const StoredRun& r : runs) {
+    const PointKey k{r.id.series, r.id.model, r.id.axes_json};
+    groups[k].push_back(&r);
+    const auto [it, fresh] = index.emplace(k, r.id.point);
+    if (!fresh) it->second = std::min(it->second, r.id.point);
+  }
   std::map<std::string, std::size_t> rank;
   for (const std::string& s : series_in_order(runs, d.study)) rank.emplace(s, rank.size());
   std::vector<PointKey> keys;
   for (const auto& [k, g] : groups) keys.push_back(k);
-  std::stable_sort(keys.begin(), keys.end(),
-                   [&](const PointKey& a, const PointKey& b) { return rank[std::get<0>(a)] < rank[std::get<0>(b)]; });
+  std::stable_sort(keys.begin(), keys.end(), [&](const PointKey& a, const PointKey& b) {
+    return std::tuple(rank[std::get<0>(a)], index[a]) < std::tuple(rank[std::get<0>(b)], index[b]);
+  });
   std::set<std::string> seen_axes;
   for (const PointKey& k : keys) {
     const auto& g = groups[k];
     d.points.push_back(make_point(g, opt));
+    d.points.back().point = index[k];
     for (const AxisEntry& a : d.points.back().axes)
       if (seen_axes.insert(a.key).second) d.axis_keys.push_back(a.key);
     d.min_replicates = d.min_replicates == 0 ? g.size() : std::min(d.min_replicates, g.size());

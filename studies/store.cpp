@@ -606,22 +606,6 @@ std::map<std::string, Provenance> Store::provenance() const {
   return out;
 }
 
-std::size_t Store::refresh_identities(const std::vector<JobIdentity>& ids) {
-  std::lock_guard lock(mutex_);
-  Transaction tx(db_);
-  Statement s(db_, "UPDATE runs SET series = ?, point = ?, point_label = ?, axes_json = ? WHERE job_key = ? AND "
-                   "(series != ? OR point != ? OR point_label != ? OR axes_json != ?)");
-  std::size_t changed = 0;
-  for (const JobIdentity& id : ids) {
-    s.bind_all(id.series, id.point, id.point_label, id.axes_json, id.key, id.series, id.point, id.point_label,
-               id.axes_json)
-        .run();
-    changed += static_cast<std::size_t>(sqlite3_changes(db_));
-  }
-  tx.commit();
-  return changed;
-}
-
 void Store::record_plan(const std::vector<PlannedJob>& plan) {
   std::lock_guard lock(mutex_);
   Transaction tx(db_);

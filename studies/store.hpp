@@ -97,13 +97,6 @@ class Store {
   // Store one finished run in one transaction. Throws if the key is already stored.
   void put(const JobIdentity& id, const RunRecord& record);
 
-  // Bring the stored identity of already-stored jobs in line with the study as it is now (series,
-  // point index, point label, axes): a sweep that gained or lost a value renumbers its points, and
-  // a stored run would otherwise keep the old index and be grouped with another point's runs.
-  // Only rows whose key is in `ids` and whose identity differs are updated (one transaction).
-  // Returns how many rows changed.
-  std::size_t refresh_identities(const std::vector<JobIdentity>& ids);
-
   // Which shard this store's put() records in `provenance` ("" = a whole-study run).
   void set_shard(const std::string& shard) { shard_ = shard; }
   // Store runs made elsewhere (a merge, an MPI rank): their code version and finish time (now when

@@ -4,6 +4,7 @@
 #include "common/text_file.hpp"
 #include "studies/confirm.hpp"
 #include "studies/jobs.hpp"
+#include "studies/report.hpp"
 #include "studies/runner.hpp"
 #include "studies/store.hpp"
 #include "studies/study.hpp"
@@ -782,31 +783,27 @@ TEST(StudyRunner, SigintExits130AndStoresOnlyCompleteRuns) {
 
 namespace {
 
-// A sweep that gains a value renumbers its points. Runs stored under the old numbering must take
-// the new one (gapflow study refreshes them before it runs): otherwise a report groups the runs
-// of value 40 (stored as point 1) with the new value 35 (now point 1).
-TEST(StudyStore, StoredRunsTakeTheStudysCurrentPointNumbering) {
-  TempDir dir;
+// A sweep that gains a value renumbers its points, and runs stored before keep their old index: the
+// runs of value 40 stored as point 1 and the new value 35, now point 1, must stay two points in the
+// report (it groups by what a run was run at, not by its index).
+TEST(StudyStore, ReportKeepsPointsApartWhenASweepWasRenumbered) {
   const auto sweep = [](const std::string& values) {
-    return parse(study_text("replicates = 1\nset = [\"particles.count=20\"]",
+    return parse(study_text("replicates = 2\nset = [\"particles.count=20\"]",
                             "[[series.sweep]]\nkey = \"bottleneck.gap_mm\"\nvalues = [" + values + "]\n"));
   };
-  const std::vector<Job> before = expand_jobs(sweep("30, 40"));
-  Store store(dir / "s.sqlite");
-  for (const Job& j : before) store.put(j.id, sample_record());
-  const std::vector<Job> after = expand_jobs(sweep("30, 35, 40"));
-  ASSERT_EQ(after.size(), 3u);
-  EXPECT_EQ(after[2].id.key, before[1].id.key);  // value 40: same job, new index
-  std::vector<JobIdentity> ids;
-  for (const Job& j : after) ids.push_back(j.id);
-  EXPECT_EQ(store.refresh_identities(ids), 1u);  // only the run of value 40 moves
-  EXPECT_EQ(store.refresh_identities(ids), 0u);  // idempotent
-  for (const StoredRun& r : store.load()) {
-    const Job& now = r.id.key == after[0].id.key ? after[0] : after[2];
-    EXPECT_EQ(r.id.point, now.id.point) << r.id.point_label;
-    EXPECT_EQ(r.id.point_label, now.id.point_label);
-    EXPECT_EQ(r.id.axes_json, now.id.axes_json);
-  }
+  const std::vector<Job> before = expand_jobs(sweep("30, 40")), after = expand_jobs(sweep("30, 35, 40"));
+  std::vector<StoredRun> runs;
+  for (const Job& j : before) runs.push_back({j.id, sample_record(), "old", "t"});
+  for (const Job& j : after)  // the new value's runs; the others are stored already (same keys)
+    if (j.id.point_label == "bottleneck.gap_mm=35") runs.push_back({j.id, sample_record(), "new", "t"});
+  ASSERT_EQ(runs[2].id.point, 1);  // value 40, stored under its old index
+  ASSERT_EQ(runs[4].id.point, 1);  // value 35, the same index now
+  const ReportData d = collect_report_data(runs, {});
+  ASSERT_EQ(d.points.size(), 3u);
+  for (const ReportPoint& p : d.points) EXPECT_EQ(p.stats.n_runs, 2u) << p.point_label;
+  std::set<std::string> labels;
+  for (const ReportPoint& p : d.points) labels.insert(p.point_label);
+  EXPECT_EQ(labels, (std::set<std::string>{"bottleneck.gap_mm=30", "bottleneck.gap_mm=35", "bottleneck.gap_mm=40"}));
 }
 
 }  // namespace
