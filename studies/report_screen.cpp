@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-using RunsByPoint = std::map<std::pair<std::string, int>, std::vector<const StoredRun*>>;
+using RunsByPoint = std::map<std::pair<std::string, std::string>, std::vector<const StoredRun*>>;  // (series, axes)
 
 // What the report says about one cell.
 struct CellResult {
@@ -95,12 +95,12 @@ std::vector<CellResult> cell_results(const StudyDef& study, const ScreenGrid& gr
   for (std::size_t i = 0; i < grid.cells.size(); ++i) {
     out[i].cell = &grid.cells[i];
     out[i].state = grid.cells[i].feasible ? HeatCell::State::missing : HeatCell::State::infeasible;
-    auto it = runs.find({grid.cells[i].series, grid.cells[i].point});
+    auto it = runs.find({grid.cells[i].series, grid.cells[i].axes_json});
     if (it != runs.end()) add_wall(out[i], it->second);
   }
   for (std::size_t k = 0; k < grid.raced.size(); ++k) {
     CellResult& c = out[static_cast<std::size_t>(grid.raced[k])];
-    const auto it = runs.find({c.cell->series, c.cell->point});
+    const auto it = runs.find({c.cell->series, c.cell->axes_json});
     const std::vector<const StoredRun*> none;
     const auto& cell_runs = it != runs.end() ? it->second : none;
     if (last.count(static_cast<int>(k))) c.last = last[static_cast<int>(k)];
@@ -143,7 +143,7 @@ TextTable budget_table(const StudyDef& study, const ScreenGrid& grid, const std:
     if (c.cell->feasible) add(c.runs, c.wall_s);
   for (const ScreenCell& base : grid.baselines) {
     CellResult r;
-    if (auto it = runs.find({base.series, base.point}); it != runs.end()) add_wall(r, it->second);
+    if (auto it = runs.find({base.series, base.axes_json}); it != runs.end()) add_wall(r, it->second);
     add(r.runs, r.wall_s);
   }
   TextTable t;
@@ -242,7 +242,7 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
   const RaceState state = replay_race(p, in);
   RunsByPoint by_point;
   for (const StoredRun& r : runs)
-    if (r.id.model == to_string(grid.model)) by_point[{r.id.series, r.id.point}].push_back(&r);
+    if (r.id.model == to_string(grid.model)) by_point[{r.id.series, r.id.axes_json}].push_back(&r);
   const std::vector<CellResult> cells = cell_results(study, grid, in, state, by_point);
 
   ExperimentSection s;

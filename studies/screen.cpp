@@ -37,9 +37,9 @@ ScreenGrid screen_grid(const StudyDef& study) {
   const SeriesDef& none = series_named(study, kScreenBaseline);
   const SweepAxis& gaps = none.axes.at(0);
   for (std::size_t w = 0; w < gaps.values.size(); ++w) {
-    ScreenCell b{none.label, static_cast<int>(w), "", 0, 0, axis_number(gaps, w) / d, static_cast<int>(w), true, ""};
+    ScreenCell b{none.label, static_cast<int>(w), "", "", 0, 0, axis_number(gaps, w) / d, static_cast<int>(w), true, ""};
     b.label = "W " + d_text(b.gap_d);
-    point_jobs(study, none, b.point, g.model, 0, 1);  // a bad baseline is an error
+    b.axes_json = point_jobs(study, none, b.point, g.model, 0, 1).front().id.axes_json;  // a bad baseline is an error
     g.baselines.push_back(b);
   }
   for (const SeriesDef& s : study.series) {
@@ -49,12 +49,12 @@ ScreenGrid screen_grid(const StudyDef& study) {
     for (std::size_t i = 0; i < size.values.size(); ++i)
       for (std::size_t j = 0; j < dist.values.size(); ++j)
         for (std::size_t w = 0; w < gap.values.size(); ++w, ++point) {
-          ScreenCell c{s.label, point, "", axis_number(size, i) / d, axis_number(dist, j) / d,
+          ScreenCell c{s.label, point, "", "", axis_number(size, i) / d, axis_number(dist, j) / d,
                        axis_number(gap, w) / d, static_cast<int>(w), true, ""};
           c.label = fmt::format("{} size {}, D {}, W {}", s.label, d_text(c.size_d), d_text(c.distance_d),
                                 d_text(c.gap_d));
           try {
-            point_jobs(study, s, point, g.model, 0, 1);
+            c.axes_json = point_jobs(study, s, point, g.model, 0, 1).front().id.axes_json;
           } catch (const ScenarioError& e) {
             if (!infeasible_placement(e)) throw;
             c.feasible = false;
@@ -77,16 +77,16 @@ RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const
   const RacingParams& p = study.screen->racing;
   const auto slots = static_cast<std::size_t>(p.max + p.confirm);
   const std::string model = to_string(grid.model);
-  std::map<std::pair<std::string, int>, std::vector<double>> j;  // (series, point) -> J by replicate
+  std::map<std::pair<std::string, std::string>, std::vector<double>> j;  // (series, axes) -> J by replicate
   for (const StoredRun& r : runs) {
     if (r.id.study != study.name || r.id.model != model || r.id.replicate < 0) continue;
-    auto& v = j[{r.id.series, r.id.point}];
+    auto& v = j[{r.id.series, r.id.axes_json}];
     v.resize(slots, std::nan(""));
     const auto rep = static_cast<std::size_t>(r.id.replicate);
     if (rep < slots) v[rep] = screen_j(r.record, study.report.j);
   }
   auto values = [&](const ScreenCell& c) {
-    auto it = j.find({c.series, c.point});
+    auto it = j.find({c.series, c.axes_json});
     return it != j.end() ? it->second : std::vector<double>(slots, std::nan(""));
   };
   RaceInput in;

@@ -22,6 +22,8 @@ struct ScreenCell {
   std::string series;  // shape ("cylinder", "A", "V") or "none"
   int point = 0;       // index in its series' grid
   std::string label;   // "size 3 d, D 2 d, W 4 d"
+  std::string axes_json;  // its axis values as stored with its runs: runs are matched by these, not by the
+                          // index, which moves when the grid gains or loses a value ("" when infeasible)
   double size_d = 0, distance_d = 0, gap_d = 0;  // in nominal d (size, distance: 0 for a baseline)
   int gap = 0;                                   // index of its gap = its baseline
   bool feasible = true;

@@ -344,5 +344,23 @@ TEST(ScreenStudy, BadKeysExitTwoWithLocation) {
              "4:1", "series", "[[series]]\nlabel = \"x\"\nscenario = \"x.toml\"\n");
 }
 
+// A screen grid that gained a value renumbers its cells; runs stored before keep their old index.
+// The race must find a cell's runs by its axis values, not by that index.
+TEST(ScreenStudy, RaceFindsACellsRunsByAxisValuesNotByIndex) {
+  const StudyDef study = load_study(source_path("studies/examples/tiny_screen.toml"));
+  const ScreenGrid grid = screen_grid(study);
+  ASSERT_GE(grid.raced.size(), 2u);
+  const ScreenCell& first = grid.cells[static_cast<std::size_t>(grid.raced[0])];
+  const ScreenCell& second = grid.cells[static_cast<std::size_t>(grid.raced[1])];
+  ASSERT_NE(first.axes_json, second.axes_json);
+  StoredRun stale;  // the first cell's run, stored under the second cell's index
+  stale.id.study = study.name, stale.id.series = first.series, stale.id.point = second.point;
+  stale.id.axes_json = first.axes_json, stale.id.model = "2d", stale.id.replicate = 0;
+  stale.record.j_paper = 42.0;
+  const RaceInput in = screen_race_input(study, grid, {stale});
+  EXPECT_EQ(in.cells[0].j.at(0), 42.0);
+  EXPECT_TRUE(std::isnan(in.cells[1].j.at(0)));
+}
+
 }  // namespace
 }  // namespace gapflow
