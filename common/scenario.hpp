@@ -141,7 +141,7 @@ struct Box2DBaseFrictionDef {
 };
 struct Box2DDef {
   double time_step_s = 0.001;       // s (lab), chosen by the convergence study (README, results/convergence-2d)
-  int velocity_iterations = 8;      // 4 save 17 % but clogs break sooner (results/convergence-2d)
+  int velocity_iterations = 8;      // 4 save 17 % but move <s> up (+19 +- 27 %, results/convergence-2d)
   int position_iterations = 3;
   bool sleeping = false;            // engine sleeping freezes slow particles and fakes clogs
   bool continuous_collision = false;// Box2D's time-of-impact pass: 19 % of the instructions, unneeded while a

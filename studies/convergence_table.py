@@ -16,7 +16,6 @@ lies inside +-tolerance; "within" when its mean is inside but the interval is no
 Reads only the store (sqlite3 from Python's standard library); writes to stdout. Runs with Debian's\n/usr/bin/python3 (python3-scipy for the t quantile).
 """
 import argparse
-import json
 import math
 import sqlite3
 import statistics
@@ -59,15 +58,12 @@ def verdict(diff, half, tol):
 def load(store, model):
     con = sqlite3.connect(f"file:{store}?mode=ro", uri=True)
     rows = con.execute(
-        "SELECT series, point, point_label, axes_json, j_paper, j_mid, wall_time_s, sim_time_s, time_step_s "
+        "SELECT series, point_label, j_paper, j_mid, time_step_s "
         "FROM runs WHERE model = ? ORDER BY series, point, replicate", (model,)).fetchall()
     points = {}
-    for series, _, label, axes, jp, jm, wall, sim, dt in rows:
-        p = points.setdefault((series, label), {"label": label, "axes": json.loads(axes), "jp": [], "jm": [],
-                                                "wall": 0.0, "sim": 0.0, "dt": dt, "n": 0})
+    for series, label, jp, jm, dt in rows:
+        p = points.setdefault((series, label), {"label": label, "jp": [], "jm": [], "dt": dt, "n": 0})
         p["n"] += 1
-        p["wall"] += wall
-        p["sim"] += sim
         if jp is not None:
             p["jp"].append(jp)
         if jm is not None:
