@@ -44,10 +44,10 @@ EvaluatorOptions evaluator_options(const CalibrateCommands::Options& o) {
 
 // --check: the data file read, every point's scenario resolved and compiled, nothing run.
 int print_data_check(const DataFile& data) {
-  std::cout << fmt::format("{}: {} points ({} held out), observable {} on a {} scale, {} free parameter(s), {} model "
+  std::cout << fmt::format("{}: {} points ({} held out), observable {}, {} free parameter(s), {} model "
                            "replicates per point; source: {} ({})\n",
                            data.name, data.points.size(), data.points.size() - data.fitted_count(),
-                           to_string(data.observable), data.scale == FitScale::log ? "log" : "linear", data.free.size(),
+                           data.observables_text(), data.free.size(),
                            data.model_replicates, data.source.citation, data.source.method);
   return 0;
 }

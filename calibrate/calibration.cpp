@@ -15,6 +15,37 @@ namespace gapflow {
 
 namespace {
 
+// Paired replicate differences (moved - base) at point i over the baseline's
+// nodes, divided by `per`: moved[first + n] is node n moved.
+std::vector<double> paired_differences(const std::vector<Prediction>& moved, std::size_t first, const BaselineFit& base,
+                                       std::size_t i, double per) {
+  std::vector<double> d;
+  for (std::size_t n = 0; n < base.nodes.size(); ++n) {
+    const Prediction& m = moved[first + n];
+    const Prediction& b = base.node_predictions[n];
+    for (std::size_t r = 0; r < b.replicate_fit[i].size(); ++r) {
+      const double x = m.replicate_fit[i][r], y = b.replicate_fit[i][r];
+      if (x == x && y == y) d.push_back((x - y) / per);
+    }
+  }
+  return d;
+}
+
+// The sizes (offsets from neutral) at which an added effect is measured beyond
+// its step: half the step; the range's end on the step's side when it lies
+// beyond 1.25 steps (and halfway there when beyond 2.5); one step, or what
+// there is of it, on the other side of neutral when the range goes there.
+std::vector<double> refinement_offsets(const Candidate& c, const EffectDef& e) {
+  const double step = c.step, sign = step > 0 ? 1.0 : -1.0;
+  std::vector<double> out{step / 2};
+  const double end = (step > 0 ? e.hi : e.lo) - c.neutral;
+  if (std::abs(end) > 2.5 * std::abs(step)) out.push_back((step + end) / 2);
+  if (std::abs(end) > 1.25 * std::abs(step)) out.push_back(end);
+  const double other = (step > 0 ? e.lo : e.hi) - c.neutral;
+  if (std::abs(other) > 0.25 * std::abs(step)) out.push_back(-sign * std::min(std::abs(other), std::abs(step)));
+  return out;
+}
+
 constexpr double kInvalidResidual = 10.0;  // a point the model cannot produce counts as 10 sigma
 
 // Data minus model over the total standard error, on the fit scale (every point).
@@ -110,38 +141,54 @@ class Loop {
       cands.push_back(c);
     }
     say(fmt::format("signatures: {} effects moved by their physical steps at {} node(s) ({} runs)", cands.size(),
-                    base.nodes.size(), sets.size() * data_.points.size() * static_cast<std::size_t>(data_.model_replicates)));
+                    base.nodes.size(), sets.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
     const std::vector<Prediction> moved = ev_.evaluate(sets);
     terms.clear();
     for (std::size_t c = 0; c < cands.size(); ++c) {
       const EffectDef& e = *find_effect(cands[c].effect);
-      EffectTerm t{e.name, e.key, cands[c].neutral, e.lo, e.hi, {}, {}};
+      std::vector<double> slope, slope_se;
       double chi2 = 0;
       int dof = 0;
       for (std::size_t i = 0; i < data_.points.size(); ++i) {
-        std::vector<double> d;  // paired replicate differences over the nodes, per unit of the key
-        for (std::size_t n = 0; n < base.nodes.size(); ++n) {
-          const Prediction& m = moved[c * base.nodes.size() + n];
-          const Prediction& b = base.node_predictions[n];
-          for (std::size_t r = 0; r < b.replicate_fit[i].size(); ++r) {
-            const double x = m.replicate_fit[i][r], y = b.replicate_fit[i][r];
-            if (x == x && y == y) d.push_back((x - y) / cands[c].step);
-          }
-        }
+        const std::vector<double> d = paired_differences(moved, c * base.nodes.size(), base, i, cands[c].step);
         const Summary s = summarize(d);
-        t.slope.push_back(d.size() >= 2 ? s.mean : 0.0);
-        t.slope_se.push_back(d.size() >= 2 ? s.se() : 0.0);
+        slope.push_back(d.size() >= 2 ? s.mean : 0.0);
+        slope_se.push_back(d.size() >= 2 ? s.se() : 0.0);
         if (data_.points[i].held_out || d.size() < 2) continue;
         ++dof;
         if (s.se() > 0) chi2 += (s.mean / s.se()) * (s.mean / s.se());
         else if (s.mean != 0) chi2 += 1e6;  // a deterministic shift
       }
+      EffectTerm t = EffectTerm::single_step(e.name, e.key, cands[c].neutral, e.lo, e.hi, cands[c].step, slope, slope_se);
       cands[c].signature = t.slope;
       cands[c].visibility_p = dof > 0 ? 1 - chi_square_cdf(chi2, dof) : 1.0;
       cands[c].visible = cands[c].visibility_p < def_.visible_p;
       terms.push_back(std::move(t));
     }
     return cands;
+  }
+
+  // Measure an effect the loop is about to add at more sizes across its range
+  // (half its step, the range's end and the middle between, the other side of
+  // neutral), so that its size is fitted on its measured response, not on a line
+  // through one step.
+  void refine(EffectTerm& term, const Candidate& c, const BaselineFit& base) {
+    const std::vector<double> offsets = refinement_offsets(c, *find_effect(c.effect));
+    std::vector<ParameterSet> sets;
+    for (double da : offsets)
+      for (const ParameterSet& n : base.nodes) sets.push_back(n.with(c.key, c.neutral + da));
+    say(fmt::format("{}: response measured at {} more size(s) ({}) at {} node(s)", c.effect, offsets.size(),
+                    fmt::join(offsets, ", "), base.nodes.size()));
+    const std::vector<Prediction> moved = ev_.evaluate(sets);
+    for (std::size_t k = 0; k < offsets.size(); ++k) {
+      std::vector<double> shift, se;
+      for (std::size_t i = 0; i < data_.points.size(); ++i) {
+        const Summary s = summarize(paired_differences(moved, k * base.nodes.size(), base, i, 1.0));
+        shift.push_back(s.n >= 2 ? s.mean : 0.0);
+        se.push_back(s.n >= 2 ? s.se() : 0.0);
+      }
+      term.add_size(offsets[k], shift, se);
+    }
   }
 
   // Score the candidates against the state's residual; X = free parameters + added effects.
@@ -229,7 +276,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   // 1. Baseline fit, on the response surface.
   const BaselineFit base = fit_baseline(data, def, ev, [&](const std::string& s) { loop.say(s); });
   Surface surface = base.surface;
-  out.before = make_state(data, base.params, surface.predict(base.params, data.scale), n_free);
+  out.before = make_state(data, base.params, surface.predict(base.params, data), n_free);
   loop.say(fmt::format("baseline {}: chi2/nu = {:.2f} (p = {:.3g}) on {} fitted points; held-out RMS {:.2f} sigma",
                        base.params.label(), out.before.fitted.chi.per_dof(), out.before.fitted.chi.p,
                        out.before.fitted.n, out.before.held_out.rms_whitened));
@@ -257,10 +304,11 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
     Surface trial = surface;
     for (const EffectTerm& t : terms)
       if (t.effect == e.name) trial.effects.push_back(t);
+    loop.refine(trial.effects.back(), *best, base);
     const ParameterSet start_at = state.params.with(e.key, std::clamp(best->neutral + best->score.estimate, e.lo, e.hi));
     const ParameterSet fitted = fit_surface(data, trial, start_at);
     const int k_after = n_free + static_cast<int>(trial.effects.size());
-    ModelState after = make_state(data, fitted, trial.predict(fitted, data.scale), k_after);
+    ModelState after = make_state(data, fitted, trial.predict(fitted, data), k_after);
     const ProfileInterval interval = profile_interval(data, trial, fitted, trial.effects.size() - 1, k_after);
     const bool bic_better = after.bic < state.bic;
     const bool held_better = after.held_out.n == 0 || after.held_out.chi.chi2 < state.held_out.chi.chi2;

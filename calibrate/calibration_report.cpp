@@ -47,7 +47,7 @@ std::string json_list(const std::vector<std::string>& v) {
 void write_summary_json(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
   o << "{\n";
   o << fmt::format("  \"data\": {},\n  \"data_file\": {},\n  \"model\": {},\n  \"observable\": {},\n", json_string(r.data_name),
-                   json_string(data.file.string()), json_string(r.model), json_string(to_string(data.observable)));
+                   json_string(data.file.string()), json_string(r.model), json_string(data.observables_text()));
   o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n", json_string(r.verdict), r.poor_fit ? "true" : "false");
   o << "  \"effects\": [";
   for (std::size_t i = 0; i < r.effects.size(); ++i) {
@@ -82,18 +82,19 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
 
 void write_points_csv(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
   for (const DesignColumn& c : data.design) o << c.column << ",";
-  o << "held_out,value,se,before,before_se,after,after_se,residual_before,residual_after\n";
+  o << "observable,held_out,value,se,before,before_se,after,after_se,residual_before,residual_after\n";
   const Prediction& b = r.before.prediction;
   const Prediction& a = r.after.prediction;
   auto model_value = [&](const Prediction& p, std::size_t i) { return p.valid[i] ? fmt::format("{}", p.value[i]) : ""; };
   auto model_se = [&](const Prediction& p, std::size_t i) {
     // Back to the observable's unit (log scale: se_fit is relative).
     if (!p.valid[i]) return std::string();
-    return fmt::format("{}", data.scale == FitScale::log ? p.se_fit[i] * p.value[i] : p.se_fit[i]);
+    return fmt::format("{}", data.points[i].scale == FitScale::log ? p.se_fit[i] * p.value[i] : p.se_fit[i]);
   };
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     for (const std::string& v : data.points[i].design) o << (v.front() == '"' ? v.substr(1, v.size() - 2) : v) << ",";
-    o << fmt::format("{},{},{},{},{},{},{},{},{}\n", data.points[i].held_out ? 1 : 0, data.points[i].value,
+    o << fmt::format("{},{},{},{},{},{},{},{},{},{}\n", to_string(data.points[i].observable),
+                     data.points[i].held_out ? 1 : 0, data.points[i].value,
                      data.points[i].se, model_value(b, i), model_se(b, i), model_value(a, i), model_se(a, i),
                      r.before.whitened[i], r.after.whitened[i]);
   }
@@ -107,9 +108,9 @@ std::string errors_row(const char* what, const ErrorMeasures& e) {
 
 void write_report_md(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
   o << fmt::format("# Calibration: {} against the {} model\n\n", r.data_name, r.model);
-  o << fmt::format("Data: `{}` ({} points, {} held out), observable `{}` on a {} scale. Source: {} ({}). {}\n\n",
+  o << fmt::format("Data: `{}` ({} points, {} held out), observable {}. Source: {} ({}). {}\n\n",
                    data.file.string(), data.points.size(), data.points.size() - data.fitted_count(),
-                   to_string(data.observable), data.scale == FitScale::log ? "log" : "linear", data.source.citation,
+                   data.observables_text(), data.source.citation,
                    data.source.method, data.source.uncertainty);
   o << fmt::format("**Verdict: {}.**", r.verdict);
   for (const AddedEffect& e : r.effects) {

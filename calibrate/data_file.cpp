@@ -22,13 +22,22 @@ const char* to_string(ObservableKind k) {
     case ObservableKind::mean_avalanche: return "mean_avalanche";
     case ObservableKind::ln_s_plus_1: return "ln_s_plus_1";
     case ObservableKind::clog_share: return "clog_share";
+    case ObservableKind::front_arrival: return "front_arrival";
+    case ObservableKind::exit_offset: return "exit_offset";
+    case ObservableKind::exit_spread: return "exit_spread";
   }
   return "?";
 }
 
 FitScale default_scale(ObservableKind k) {
-  return k == ObservableKind::ln_s_plus_1 || k == ObservableKind::clog_share ? FitScale::linear : FitScale::log;
+  // An offset is signed (0 at the gap's centre): linear like a share and a logarithm.
+  return k == ObservableKind::ln_s_plus_1 || k == ObservableKind::clog_share || k == ObservableKind::exit_offset
+             ? FitScale::linear
+             : FitScale::log;
 }
+
+double to_fit_scale(FitScale scale, double v) { return scale == FitScale::log ? std::log(v) : v; }
+double from_fit_scale(FitScale scale, double v) { return scale == FitScale::log ? std::exp(v) : v; }
 
 namespace {
 
@@ -42,8 +51,20 @@ const std::vector<std::string> kFreeKeys{"key", "lo", "hi", "step"};
 const std::vector<std::string> kPointsKeys{"csv"};
 const std::vector<std::string> kMethods{"measured", "digitized", "simulated"};
 const std::vector<std::string> kKinds{"j_paper", "j_mid", "j_flowing", "j_star", "mean_avalanche", "ln_s_plus_1",
-                                      "clog_share"};
-const std::vector<std::string> kValueColumns{"value", "uncertainty", "replicates", "held_out"};
+                                      "clog_share",   "front_arrival", "exit_offset", "exit_spread"};
+const char* const kKindList =
+    "one of j_paper, j_mid, j_flowing, j_star, mean_avalanche, ln_s_plus_1, clog_share, front_arrival, exit_offset, "
+    "exit_spread";
+const std::vector<std::string> kValueColumns{"value", "uncertainty", "replicates", "held_out", "observable"};
+
+ObservableKind kind_named(const std::string& name) {
+  for (std::size_t i = 0; i < kKinds.size(); ++i)
+    if (kKinds[i] == name) return static_cast<ObservableKind>(i);
+  throw std::logic_error("unknown observable " + name);
+}
+
+// A share and a signed offset can be 0 or negative: never on a log scale.
+bool log_scale_allowed(ObservableKind k) { return k != ObservableKind::clog_share && k != ObservableKind::exit_offset; }
 
 // The seed and the replicate are the calibration's (common random numbers).
 bool reserved_key(const std::string& key) { return key == "run.seed" || key == "run.replicate"; }
@@ -94,13 +115,12 @@ void read_model(StrictTable t, DataFile& d, const std::filesystem::path& base_di
 
 void read_observable(StrictTable t, DataFile& d, std::string& uncertainty_kind) {
   const auto kind = t.choice("kind", kKinds);
-  if (!kind) t.missing("kind", "required: one of j_paper, j_mid, j_flowing, j_star, mean_avalanche, ln_s_plus_1, clog_share");
-  for (std::size_t i = 0; i < kKinds.size(); ++i)
-    if (kKinds[i] == *kind) d.observable = static_cast<ObservableKind>(i);
+  if (!kind) t.missing("kind", std::string("required: ") + kKindList);
+  d.observable = kind_named(*kind);
   d.scale = default_scale(d.observable);
   if (auto s = t.choice("scale", {"log", "linear"})) d.scale = *s == "log" ? FitScale::log : FitScale::linear;
-  if (d.scale == FitScale::log && d.observable == ObservableKind::clog_share)
-    t.fail("scale", *t.get("scale"), "a share can be 0: use \"linear\"");
+  if (d.scale == FitScale::log && !log_scale_allowed(d.observable))
+    t.fail("scale", *t.get("scale"), "a share or an offset can be 0 or negative: use \"linear\"");
   uncertainty_kind = t.choice("uncertainty", {"se", "ci95"}).value_or("se");
   d.floor_relative = t.number("floor_relative", 0, 1).value_or(0.0);
 }
@@ -110,7 +130,7 @@ DesignColumn read_design(StrictTable t) {
   c.where = t.here();
   c.column = required_text(t, "column", "the column's name in the points");
   if (std::find(kValueColumns.begin(), kValueColumns.end(), c.column) != kValueColumns.end())
-    t.fail("column", *t.get("column"), "must not be one of value, uncertainty, replicates, held_out");
+    t.fail("column", *t.get("column"), "must not be one of value, uncertainty, replicates, held_out, observable");
   c.key = required_text(t, "key", "the scenario key the column sets, e.g. \"bottleneck.gap_mm\"");
   if (reserved_key(c.key)) t.fail("key", *t.get("key"), "run.seed and run.replicate are the calibration's");
   c.in_diameters = t.choice("unit", {"d", "lab"}).value_or("lab") == "d";
@@ -159,9 +179,16 @@ DataPoint read_point(StrictTable t, const DataFile& d, const std::string& uncert
     if (!n) t.missing(c.column, fmt::format("required: the design column '{}' (sets {})", c.column, c.key));
     p.design.push_back(design_literal(*n, t, c.column));
   }
+  p.observable = d.observable;
+  p.scale = d.scale;
+  if (auto kind = t.choice("observable", kKinds)) {
+    p.observable = kind_named(*kind);
+    if (p.observable != d.observable) p.scale = default_scale(p.observable);
+  }
   const auto value = t.number("value", -1e300, 1e300);
-  if (!value) t.missing("value", fmt::format("required: the measured {}", to_string(d.observable)));
-  if (d.scale == FitScale::log && *value <= 0) t.fail("value", *t.get("value"), "must be > 0 on a log scale");
+  if (!value) t.missing("value", fmt::format("required: the measured {}", to_string(p.observable)));
+  if (p.scale == FitScale::log && *value <= 0)
+    t.fail("value", *t.get("value"), fmt::format("must be > 0 ({} is fitted on a log scale)", to_string(p.observable)));
   const auto u = t.number("uncertainty", 0, 1e300);
   if (!u) t.missing("uncertainty", fmt::format("required: the value's {}", uncertainty_kind));
   p.value = *value;
@@ -205,7 +232,8 @@ std::vector<DataPoint> read_csv_points(const std::filesystem::path& csv, const S
     if (header.empty()) {
       for (const std::string& h : cells)
         if (std::find(allowed.begin(), allowed.end(), h) == allowed.end())
-          throw ScenarioError(at, h, "", "unknown column; allowed: design columns, value, uncertainty, replicates, held_out");
+          throw ScenarioError(at, h, "",
+                              "unknown column; allowed: design columns, value, uncertainty, replicates, held_out, observable");
       header = cells;
       continue;
     }
@@ -334,7 +362,40 @@ LoadedScenario DataFile::point_scenario(std::size_t i, const std::vector<std::st
 std::string DataFile::point_label(std::size_t i) const {
   std::string s;
   for (std::size_t c = 0; c < design.size(); ++c) s += (c ? ", " : "") + design[c].column + "=" + points[i].design[c];
+  if (mixed_observables()) s += std::string(": ") + to_string(points[i].observable);
   return s;
+}
+
+std::size_t DataFile::distinct_runs_per_replicate() const {
+  std::set<std::vector<std::string>> seen;
+  for (const DataPoint& p : points) seen.insert(p.design);
+  return seen.size();
+}
+
+bool DataFile::mixed_observables() const {
+  for (const DataPoint& p : points)
+    if (p.observable != points.front().observable) return true;
+  return false;
+}
+
+std::string DataFile::observables_text() const {
+  std::vector<std::pair<std::string, int>> seen;  // "kind (scale)", points; in order of appearance
+  for (const DataPoint& p : points) {
+    const std::string k = fmt::format("{} ({})", to_string(p.observable), p.scale == FitScale::log ? "log" : "linear");
+    auto it = std::find_if(seen.begin(), seen.end(), [&](const auto& e) { return e.first == k; });
+    if (it == seen.end()) seen.emplace_back(k, 1);
+    else ++it->second;
+  }
+  if (seen.size() == 1) return seen.front().first;
+  std::string s;
+  for (const auto& [k, n] : seen) s += fmt::format("{}{} at {} points", s.empty() ? "" : ", ", k, n);
+  return s;
+}
+
+double DataFile::fit_value(std::size_t i) const { return to_fit_scale(points[i].scale, points[i].value); }
+
+double DataFile::fit_se(std::size_t i) const {
+  return points[i].scale == FitScale::log ? points[i].se / points[i].value : points[i].se;
 }
 
 std::size_t DataFile::fitted_count() const {

@@ -10,11 +10,15 @@
 //   [data]        name, description
 //   [source]      citation, method (measured | digitized | simulated), uncertainty (notes)
 //   [model]       scenario (relative to this file), set ["key=value", ...], replicates, seed
-//   [observable]  kind, scale, uncertainty (se | ci95), floor_relative
+//   [observable]  kind, scale, uncertainty (se | ci95), floor_relative  (the points' default observable)
 //   [[design]]    column, key, unit (d | lab)
 //   [[free]]      key, lo, hi, step
 //   [points]      csv = "file.csv" (relative to this file)   -- or --   [[point]] rows
-// Each point: one value per design column, value, uncertainty, replicates, held_out.
+// Each point: one value per design column, value, uncertainty, replicates, held_out,
+// and optionally observable (another kind than [observable]'s, measured on the same
+// runs: a point with the design values of another and a different observable costs
+// no simulation, and several observables of one experiment tell effects apart that
+// one alone cannot).
 #pragma once
 
 #include "common/scenario_loader.hpp"
@@ -35,7 +39,10 @@ enum class ObservableKind {
   j_star,          // J_paper sqrt(d/g), g = 9.81 m/s^2
   mean_avalanche,  // <s>, censoring-aware mean avalanche size (first avalanches dropped)
   ln_s_plus_1,     // ln(<s> + 1)
-  clog_share       // share of runs with at least one clog
+  clog_share,      // share of runs with at least one clog
+  front_arrival,   // s, barrier opening (t = 0) to the first crossing: how fast the packing starts to move
+  exit_offset,     // mm, mean crossing position across the gap (0 = its centre; + toward +x)
+  exit_spread      // mm, standard deviation of the crossing positions across the gap
 };
 const char* to_string(ObservableKind k);
 
@@ -71,6 +78,8 @@ struct DataPoint {
   double se = 0;                    // standard error of value (from the file's uncertainty, floor applied)
   int replicates = 1;               // runs or experiments behind the value
   bool held_out = false;            // not used in any fit; scored separately
+  ObservableKind observable = ObservableKind::j_paper;  // what `value` measures (default: [observable] kind)
+  FitScale scale = FitScale::log;   // its fit scale ([observable] scale for that kind, else the kind's default)
   SourceLocation where;
 };
 
@@ -83,8 +92,8 @@ struct DataFile {
   std::vector<std::string> set;          // fixed overrides
   int model_replicates = 4;              // model runs per point and parameter value (common random numbers)
   std::uint64_t seed = 1;                // run.seed of the model runs
-  ObservableKind observable = ObservableKind::j_paper;
-  FitScale scale = FitScale::log;
+  ObservableKind observable = ObservableKind::j_paper;  // the points' default observable
+  FitScale scale = FitScale::log;                       // its fit scale
   double floor_relative = 0;             // relative SE floor added in quadrature
   std::vector<DesignColumn> design;
   std::vector<FreeParameter> free;
@@ -97,13 +106,24 @@ struct DataFile {
   // A short label of point i ("W_over_d=4.5, shape=V").
   std::string point_label(std::size_t i) const;
   std::size_t fitted_count() const;
+  // Design points that need runs of their own (points measuring other observables on the same runs count once).
+  std::size_t distinct_runs_per_replicate() const;
+  // Whether points measure more than one observable (reports then name each point's).
+  bool mixed_observables() const;
+  // "j_mid on a log scale", or per observable with its point count when mixed.
+  std::string observables_text() const;
+  // Point i's fit-scale value and standard error.
+  double fit_value(std::size_t i) const;
+  double fit_se(std::size_t i) const;
 };
 
 DataFile load_data_file(const std::filesystem::path& file);
 // From text (tests). Paths inside resolve against base_dir.
 DataFile parse_data_file(std::string_view text, std::string_view source_name, const std::filesystem::path& base_dir);
 
-// The observable's default fit scale (log for rates and sizes).
+// The observable's default fit scale (log for rates, times, sizes and spreads).
 FitScale default_scale(ObservableKind k);
+double to_fit_scale(FitScale scale, double v);
+double from_fit_scale(FitScale scale, double v);
 
 }  // namespace gapflow

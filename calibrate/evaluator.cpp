@@ -47,9 +47,6 @@ double ParameterSet::get(const std::string& key, double fallback) const {
   return fallback;
 }
 
-double to_fit_scale(FitScale scale, double v) { return scale == FitScale::log ? std::log(v) : v; }
-double from_fit_scale(FitScale scale, double v) { return scale == FitScale::log ? std::exp(v) : v; }
-
 namespace {
 
 std::optional<double> rate_of(ObservableKind kind, const RunRecord& r) {
@@ -107,6 +104,19 @@ PointObservable avalanche_observable(ObservableKind kind, FitScale scale, const 
 
 }  // namespace
 
+// Per run: the front's arrival (s), or the mean or spread of where the runs'
+// particles crossed the gap line (mm from its centre; plane frame, +x across).
+std::optional<double> crossing_statistic(ObservableKind kind, const RunRecord& r) {
+  if (r.crossings.empty()) return std::nullopt;
+  if (kind == ObservableKind::front_arrival) return r.crossings.front().t;  // sorted by time (GapMonitor::finish)
+  std::vector<double> x_mm;
+  for (const Crossing& c : r.crossings) x_mm.push_back(c.x * 1e3);
+  const Summary s = summarize(x_mm);
+  if (kind == ObservableKind::exit_offset) return s.mean;
+  if (s.n < 2) return std::nullopt;
+  return s.sd;
+}
+
 PointObservable observe(ObservableKind kind, FitScale scale, const std::vector<RunRecord>& runs) {
   switch (kind) {
     case ObservableKind::mean_avalanche:
@@ -120,15 +130,19 @@ PointObservable observe(ObservableKind kind, FitScale scale, const std::vector<R
       return o;
     }
     default: {
+      const bool from_crossings = kind == ObservableKind::front_arrival || kind == ObservableKind::exit_offset ||
+                                  kind == ObservableKind::exit_spread;
       std::vector<double> rates;
-      for (const RunRecord& r : runs) rates.push_back(rate_of(kind, r).value_or(kNaN));
+      for (const RunRecord& r : runs)
+        rates.push_back((from_crossings ? crossing_statistic(kind, r) : rate_of(kind, r)).value_or(kNaN));
       std::vector<double> defined;
       for (double v : rates)
         if (v == v) defined.push_back(v);
       PointObservable o = mean_observable(defined, scale);
       o.valid = o.valid && defined.size() == rates.size();
       o.replicate_fit.clear();
-      for (double v : rates) o.replicate_fit.push_back(v == v && v > 0 ? to_fit_scale(scale, v) : kNaN);
+      for (double v : rates)
+        o.replicate_fit.push_back(v == v && (v > 0 || scale == FitScale::linear) ? to_fit_scale(scale, v) : kNaN);
       return o;
     }
   }
@@ -170,6 +184,7 @@ std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& set
       }
   // Run what is missing; keep the records of this call in memory.
   std::map<std::string, RunRecord> fresh;
+  std::set<std::string> counted;  // a run shared by points (several observables) is counted once
   std::mutex fresh_mutex;
   RunnerOptions ro;
   ro.workers = options_.workers;
@@ -210,9 +225,10 @@ std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& set
           if (!stored) throw std::runtime_error("run " + jobs[j].id.key + " is missing from the store");
           runs.push_back(std::move(stored->record));
         }
-        run_seconds_ += runs.back().wall_time_s;
+        if (counted.insert(jobs[j].id.key).second) run_seconds_ += runs.back().wall_time_s;
       }
-      const PointObservable o = observe(data_.observable, data_.scale, runs);
+      const DataPoint& point = data_.points[i];
+      const PointObservable o = observe(point.observable, point.scale, runs);
       p.value.push_back(o.value);
       p.fit.push_back(o.fit);
       p.se_fit.push_back(o.se_fit);

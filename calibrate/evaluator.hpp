@@ -48,8 +48,6 @@ struct PointObservable {
   bool valid = false;
 };
 PointObservable observe(ObservableKind kind, FitScale scale, const std::vector<RunRecord>& runs);
-double to_fit_scale(FitScale scale, double v);
-double from_fit_scale(FitScale scale, double v);
 
 struct EvaluatorOptions {
   ModelKind model = ModelKind::box2d;

@@ -9,12 +9,10 @@
 
 namespace gapflow {
 
-double data_fit_value(const DataFile& data, std::size_t i) { return to_fit_scale(data.scale, data.points[i].value); }
+double data_fit_value(const DataFile& data, std::size_t i) { return data.fit_value(i); }
 
 double total_sigma(const DataFile& data, const Prediction& p, std::size_t i) {
-  const DataPoint& d = data.points[i];
-  const double se_data = data.scale == FitScale::log ? d.se / d.value : d.se;
-  return std::hypot(se_data, p.se_fit[i]);
+  return std::hypot(data.fit_se(i), p.se_fit[i]);
 }
 
 double chi2_of(const DataFile& data, const Prediction& p, bool held_out) {
@@ -127,20 +125,63 @@ std::vector<Var> variables(const Surface& s, const std::string& fixed) {
 
 }  // namespace
 
-Prediction Surface::predict(const ParameterSet& params, FitScale scale) const {
+EffectTerm EffectTerm::single_step(std::string effect, std::string key, double neutral, double lo, double hi,
+                                   double step, std::vector<double> slope, std::vector<double> slope_se) {
+  EffectTerm t;
+  t.effect = std::move(effect), t.key = std::move(key), t.neutral = neutral, t.lo = lo, t.hi = hi;
+  t.offsets = {0.0};
+  t.shift = {std::vector<double>(slope.size(), 0.0)};
+  t.shift_se = t.shift;
+  t.slope = std::move(slope), t.slope_se = std::move(slope_se);
+  std::vector<double> at, se;
+  for (std::size_t i = 0; i < t.slope.size(); ++i) at.push_back(t.slope[i] * step), se.push_back(std::abs(t.slope_se[i] * step));
+  t.add_size(step, at, se);
+  return t;
+}
+
+void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<double> se_at) {
+  const auto k = static_cast<std::size_t>(std::lower_bound(offsets.begin(), offsets.end(), da) - offsets.begin());
+  if (k < offsets.size() && offsets[k] == da) {
+    shift[k] = std::move(shift_at), shift_se[k] = std::move(se_at);
+    return;
+  }
+  offsets.insert(offsets.begin() + static_cast<std::ptrdiff_t>(k), da);
+  shift.insert(shift.begin() + static_cast<std::ptrdiff_t>(k), std::move(shift_at));
+  shift_se.insert(shift_se.begin() + static_cast<std::ptrdiff_t>(k), std::move(se_at));
+}
+
+double EffectTerm::response(std::size_t i, double da, double& variance) const {
+  if (offsets.size() < 2) return variance = 0, 0.0;
+  // The segment that holds da (the end segments extend beyond the measured sizes).
+  std::size_t k = 0;
+  while (k + 2 < offsets.size() && da > offsets[k + 1]) ++k;
+  const double w = (da - offsets[k]) / (offsets[k + 1] - offsets[k]);
+  const double a = shift[k][i], b = shift[k + 1][i];
+  const double sa = shift_se[k][i] * (1 - w), sb = shift_se[k + 1][i] * w;
+  variance = sa * sa + sb * sb;
+  return a + w * (b - a);
+}
+
+Prediction Surface::predict(const ParameterSet& params, const DataFile& data) const {
+  Prediction p = predict_fit(params);
+  for (std::size_t i = 0; i < p.fit.size(); ++i) p.value[i] = from_fit_scale(data.points[i].scale, p.fit[i]);
+  return p;
+}
+
+Prediction Surface::predict_fit(const ParameterSet& params) const {
   Prediction p;
   const Eigen::VectorXd b = basis(scaled(*this, params), true);
   for (std::size_t i = 0; i < coef.size(); ++i) {
     double f = b.dot(coef[i]);
     double var = b.dot(cov[i] * b);
     for (const EffectTerm& e : effects) {
-      const double da = params.get(e.key, e.neutral) - e.neutral;
-      f += e.slope[i] * da;
-      var += (e.slope_se[i] * da) * (e.slope_se[i] * da);
+      double v = 0;
+      f += e.response(i, params.get(e.key, e.neutral) - e.neutral, v);
+      var += v;
     }
     p.fit.push_back(f);
     p.se_fit.push_back(std::sqrt(std::max(var, 0.0)));
-    p.value.push_back(from_fit_scale(scale, f));
+    p.value.push_back(f);
     p.valid.push_back(valid[i]);
     p.replicate_fit.emplace_back();
   }
@@ -151,7 +192,7 @@ std::vector<double> Surface::derivative(const ParameterSet& params, std::size_t 
   const double h = 1e-4 * half[k];
   const ParameterSet up = params.with(keys[k], params.get(keys[k], centre[k]) + h);
   const ParameterSet dn = params.with(keys[k], params.get(keys[k], centre[k]) - h);
-  const Prediction a = predict(up, FitScale::linear), b = predict(dn, FitScale::linear);
+  const Prediction a = predict_fit(up), b = predict_fit(dn);
   std::vector<double> d;
   for (std::size_t i = 0; i < coef.size(); ++i) d.push_back((a.fit[i] - b.fit[i]) / (2 * h));
   return d;
@@ -184,7 +225,7 @@ ParameterSet fit_surface(const DataFile& data, const Surface& s, const Parameter
     const auto& c = *static_cast<Ctx*>(raw);
     ParameterSet p = *c.start;
     for (std::size_t k = 0; k < xv.size(); ++k) p = p.with((*c.vars)[k].key, xv[k]);
-    return chi2_of(*c.data, c.s->predict(p, c.data->scale));
+    return chi2_of(*c.data, c.s->predict(p, *c.data));
   };
   opt.set_min_objective(f, &ctx);
   double value = 0;
@@ -206,9 +247,9 @@ ProfileInterval profile_interval(const DataFile& data, const Surface& s, const P
     const double v = t.lo + (t.hi - t.lo) * k / kSteps;
     const ParameterSet p = fit_surface(data, s, fitted.with(t.key, v), t.key);
     a.push_back(v);
-    chi2.push_back(chi2_of(data, s.predict(p, data.scale)));
+    chi2.push_back(chi2_of(data, s.predict(p, data)));
   }
-  const double at_fit = chi2_of(data, s.predict(fitted, data.scale));
+  const double at_fit = chi2_of(data, s.predict(fitted, data));
   const std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
   const double minimum = std::min(at_fit, chi2[best]);
   const double nu = std::max(1.0, static_cast<double>(data.fitted_count()) - fitted_parameters);
@@ -251,7 +292,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
     grid = next;
   }
   say(fmt::format("baseline: {} grid node(s) over the free parameters ({} runs)", grid.size(),
-                  grid.size() * data.points.size() * static_cast<std::size_t>(data.model_replicates)));
+                  grid.size() * data.distinct_runs_per_replicate() * static_cast<std::size_t>(data.model_replicates)));
   const std::vector<Prediction> preds = ev.evaluate(grid);
   std::vector<double> chi2;
   for (const Prediction& p : preds) chi2.push_back(chi2_of(data, p));
@@ -286,7 +327,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   for (std::size_t k = 0; k < std::min<std::size_t>(3, order.size()); ++k)
     out.nodes.push_back(nodes[order[k]]), out.node_predictions.push_back(node_preds[order[k]]);
   say(fmt::format("  response surface through {} node(s); its minimum: {} (chi2 = {:.2f})", nodes.size(),
-                  out.params.label(), chi2_of(data, out.surface.predict(out.params, data.scale))));
+                  out.params.label(), chi2_of(data, out.surface.predict(out.params, data))));
   return out;
 }
 

@@ -33,13 +33,29 @@ double total_sigma(const DataFile& data, const Prediction& p, std::size_t i);
 // chi^2 over the fitted (or held-out) points; an invalid model point counts as 10 sigma.
 double chi2_of(const DataFile& data, const Prediction& p, bool held_out = false);
 
-// A linear effect term of the surface: d(fit)/d(key) per point.
+// An effect term of the surface: the shift of every point's fit-scale value when
+// the effect's key moves from its neutral value, measured under common random
+// numbers at a few sizes and interpolated linearly between them (extrapolated
+// with the end segments). A candidate starts with one size (its physical step:
+// `slope` is its signature); an effect the loop adds is measured at more sizes
+// across its range, because few effects act linearly over it: a lateral tilt
+// moves where spheres leave linearly but slows the flow quadratically.
 struct EffectTerm {
   std::string effect, key;
   double neutral = 0;             // the template's value (the term is 0 there)
   double lo = 0, hi = 0;          // plausible range (key units)
-  std::vector<double> slope;      // per point
+  std::vector<double> slope;      // per point: shift at the first step / step
   std::vector<double> slope_se;   // per point (paired replicate differences)
+  std::vector<double> offsets;    // sizes measured, key - neutral, ascending, 0 included
+  std::vector<std::vector<double>> shift, shift_se;  // [size][point], fit scale (0 at offset 0)
+
+  // A term measured at one step: shift = slope * step.
+  static EffectTerm single_step(std::string effect, std::string key, double neutral, double lo, double hi, double step,
+                                std::vector<double> slope, std::vector<double> slope_se);
+  // Add the shifts measured at offset `da` (kept sorted).
+  void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at);
+  // Shift at point i for an offset da, and its variance.
+  double response(std::size_t i, double da, double& variance) const;
 };
 
 // The model near the fit: quadratic in the free parameters, linear in effects.
@@ -53,7 +69,9 @@ struct Surface {
   std::vector<EffectTerm> effects;    // added (fitted) effects
 
   // Value, fit-scale value and its se at each point; params hold free keys and effect keys.
-  Prediction predict(const ParameterSet& params, FitScale scale) const;
+  Prediction predict(const ParameterSet& params, const DataFile& data) const;
+  // The same with `value` left on the fit scale (no data file needed).
+  Prediction predict_fit(const ParameterSet& params) const;
   // d(fit)/d(key) of a free parameter at `params`, per point.
   std::vector<double> derivative(const ParameterSet& params, std::size_t k) const;
 };

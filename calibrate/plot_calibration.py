@@ -24,34 +24,40 @@ def main(folder):
     folder = Path(folder)
     rows = list(csv.DictReader(open(folder / "points.csv")))
     summary = json.load(open(folder / "summary.json"))
-    fixed = {"held_out", "value", "se", "before", "before_se", "after", "after_se", "residual_before", "residual_after"}
+    fixed = {"observable", "held_out", "value", "se", "before", "before_se", "after", "after_se", "residual_before",
+             "residual_after"}
     design = [c for c in rows[0].keys() if c not in fixed]
     numeric = [c for c in design if all(number(r[c]) is not None for r in rows)]
     labels = [c for c in design if c not in numeric]
-    observable = summary["observable"]
+    # One row of panels per observable (a data file may measure several on the same runs).
+    observables = list(dict.fromkeys(r.get("observable", summary["observable"]) for r in rows))
 
     # Data and model before/after against each numeric design column; other columns split the series.
-    fig, axes = plt.subplots(1, max(1, len(numeric)), figsize=(5.5 * max(1, len(numeric)), 4.2), squeeze=False)
-    for ax, col in zip(axes[0], numeric or design[:1]):
-        groups = {}
-        for r in rows:
-            key = tuple(r[c] for c in labels) + tuple(r[c] for c in numeric if c != col)
-            groups.setdefault(key, []).append(r)
-        for gi, (key, rs) in enumerate(sorted(groups.items())):
-            rs = sorted(rs, key=lambda r: number(r[col]) or 0)
-            x = [number(r[col]) for r in rs]
-            tag = ", ".join(f"{c}={v}" for c, v in zip(labels + [c for c in numeric if c != col], key))
-            colour = f"C{gi % 10}"
-            for r, xi in zip(rs, x):
-                ax.errorbar(xi, float(r["value"]), yerr=1.96 * float(r["se"]), fmt="o" if r["held_out"] == "0" else "s",
-                            mfc=colour if r["held_out"] == "0" else "white", color=colour, capsize=2)
-            for which, style in (("before", ":"), ("after", "-")):
-                pts = [(xi, number(r[which])) for r, xi in zip(rs, x) if number(r[which]) is not None]
-                if pts:
-                    ax.plot(*zip(*pts), style, color=colour, label=f"{which}: {tag}" if tag else which)
-        ax.set_xlabel(col)
-        ax.set_ylabel(observable)
-        ax.grid(alpha=0.3)
+    ncol = max(1, len(numeric))
+    fig, axes = plt.subplots(len(observables), ncol, figsize=(5.5 * ncol, 4.2 * len(observables)), squeeze=False)
+    for oi, observable in enumerate(observables):
+        obs_rows = [r for r in rows if r.get("observable", observable) == observable]
+        for ax, col in zip(axes[oi], numeric or design[:1]):
+            groups = {}
+            for r in obs_rows:
+                key = tuple(r[c] for c in labels) + tuple(r[c] for c in numeric if c != col)
+                groups.setdefault(key, []).append(r)
+            for gi, (key, rs) in enumerate(sorted(groups.items())):
+                rs = sorted(rs, key=lambda r: number(r[col]) or 0)
+                x = [number(r[col]) for r in rs]
+                tag = ", ".join(f"{c}={v}" for c, v in zip(labels + [c for c in numeric if c != col], key))
+                colour = f"C{gi % 10}"
+                for r, xi in zip(rs, x):
+                    ax.errorbar(xi, float(r["value"]), yerr=1.96 * float(r["se"]),
+                                fmt="o" if r["held_out"] == "0" else "s",
+                                mfc=colour if r["held_out"] == "0" else "white", color=colour, capsize=2)
+                for which, style in (("before", ":"), ("after", "-")):
+                    pts = [(xi, number(r[which])) for r, xi in zip(rs, x) if number(r[which]) is not None]
+                    if pts:
+                        ax.plot(*zip(*pts), style, color=colour, label=f"{which}: {tag}" if tag else which)
+            ax.set_xlabel(col)
+            ax.set_ylabel(observable)
+            ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=6)
     fig.suptitle(f"{summary['data']}: data (95 % bars; open = held out) and {summary['model']} model before (dotted) / after (solid)",
                  fontsize=9)
@@ -66,7 +72,9 @@ def main(folder):
     ax.plot(idx, [float(r["residual_before"]) for r in rows], "o", mfc="white", label="before")
     ax.plot(idx, [float(r["residual_after"]) for r in rows], "o", label="after")
     ax.set_xticks(list(idx))
-    ax.set_xticklabels([("*" if r["held_out"] == "1" else "") + "/".join(r[c] for c in design) for r in rows],
+    ax.set_xticklabels([("*" if r["held_out"] == "1" else "") + "/".join([r[c] for c in design] +
+                                                                      ([r["observable"]] if len(observables) > 1 else []))
+                        for r in rows],
                        rotation=60, fontsize=6)
     ax.set_ylabel("(data - model) / total se")
     ax.set_title("residuals (* = held out; band: +-1.96)", fontsize=9)

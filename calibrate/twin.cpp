@@ -56,10 +56,11 @@ void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, con
   for (std::size_t i = 0; i < d.points.size(); ++i) {
     if (!p.valid[i])
       throw std::runtime_error(fmt::format("twin: the model gives no {} at point {} (e.g. a run never emptied)",
-                                           to_string(d.observable), d.point_label(i)));
-    const double se = d.scale == FitScale::log ? p.se_fit[i] * p.value[i] : p.se_fit[i];
+                                           to_string(d.points[i].observable), d.point_label(i)));
+    const double se = d.points[i].scale == FitScale::log ? p.se_fit[i] * p.value[i] : p.se_fit[i];
     o << "[[point]]\n";
     for (std::size_t c = 0; c < d.design.size(); ++c) o << d.design[c].column << " = " << d.points[i].design[c] << "\n";
+    if (d.points[i].observable != d.observable) o << "observable = \"" << to_string(d.points[i].observable) << "\"\n";
     o << fmt::format("value = {}\nuncertainty = {}\nreplicates = {}\nheld_out = {}\n\n", number_text(p.value[i]),
                      number_text(se), def.replicates, d.points[i].held_out ? "true" : "false");
   }
@@ -77,7 +78,7 @@ ParameterSet without_planted_effects(const DataFile& design, const TwinTruth& tr
 // The noise a calibration of the twin sees at point i, on the fit scale: the twin
 // file's se (with the design's floor) and the model's at the design's replicate count.
 double calibration_sigma(const DataFile& design, const TwinDef& def, const Prediction& with, std::size_t i) {
-  const double floor = design.floor_relative * (design.scale == FitScale::log ? 1.0 : with.value[i]);
+  const double floor = design.floor_relative * (design.points[i].scale == FitScale::log ? 1.0 : std::abs(with.value[i]));
   const double model_share = static_cast<double>(def.replicates) / design.model_replicates;
   return std::hypot(std::hypot(with.se_fit[i], floor), with.se_fit[i] * std::sqrt(model_share));
 }

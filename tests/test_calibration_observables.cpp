@@ -1,0 +1,154 @@
+// Several observables in one data file: points that measure the front's arrival,
+// where the spheres leave the gap, or J on the same runs; the observables computed
+// from known crossings; and the effect terms' measured response (interpolated
+// between the sizes the loop simulated).
+#include "calibrate/data_file.hpp"
+#include "calibrate/evaluator.hpp"
+#include "calibrate/fit.hpp"
+#include "common/statistics.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace gapflow {
+namespace {
+
+using testing::source_path;
+using testing::TempDir;
+
+const char* kHead = R"(
+[data]
+name = "t"
+[source]
+citation = "test"
+method = "simulated"
+uncertainty = "se of 10 runs"
+[model]
+scenario = "scenarios/paper/no_obstruction_medium.toml"
+set = ["particles.count=30", "run.time_limit_s=10"]
+replicates = 2
+[observable]
+kind = "j_mid"
+[[design]]
+column = "W_over_d"
+key = "bottleneck.gap_mm"
+unit = "d"
+)";
+constexpr int kHeadLines = 17;  // kHead's lines (the first is empty)
+
+DataFile parse(const std::string& tail) { return parse_data_file(std::string(kHead) + tail, "t.toml", source_path("")); }
+
+const std::string kFourPoints =
+    "[[point]]\nW_over_d = 4\nvalue = 80\nuncertainty = 2\n"
+    "[[point]]\nW_over_d = 4\nobservable = \"front_arrival\"\nvalue = 1.2\nuncertainty = 0.05\n"
+    "[[point]]\nW_over_d = 4\nobservable = \"exit_offset\"\nvalue = -0.4\nuncertainty = 0.2\n"
+    "[[point]]\nW_over_d = 5\nobservable = \"exit_spread\"\nvalue = 6\nuncertainty = 0.3\n";
+
+TEST(DataFileObservables, PointsMayMeasureOtherObservablesOnTheSameRuns) {
+  const DataFile d = parse(kFourPoints);
+  ASSERT_EQ(d.points.size(), 4u);
+  EXPECT_EQ(d.points[0].observable, ObservableKind::j_mid);
+  EXPECT_EQ(d.points[1].observable, ObservableKind::front_arrival);
+  EXPECT_EQ(d.points[2].observable, ObservableKind::exit_offset);
+  EXPECT_EQ(d.points[3].observable, ObservableKind::exit_spread);
+  EXPECT_EQ(d.points[1].scale, FitScale::log);
+  EXPECT_EQ(d.points[2].scale, FitScale::linear);  // signed: an offset can be negative
+  EXPECT_EQ(d.points[3].scale, FitScale::log);
+  EXPECT_TRUE(d.mixed_observables());
+  EXPECT_EQ(d.distinct_runs_per_replicate(), 2u);  // three points share W = 4 d
+  EXPECT_NE(d.point_label(1).find("front_arrival"), std::string::npos) << d.point_label(1);
+  EXPECT_NEAR(d.fit_value(2), -0.4, 1e-12);
+  EXPECT_NEAR(d.fit_se(1), 0.05 / 1.2, 1e-12);  // relative on a log scale
+  EXPECT_NE(d.observables_text().find("exit_offset (linear) at 1 points"), std::string::npos) << d.observables_text();
+}
+
+TEST(DataFileObservables, BadObservablesAreRejectedWithKeyAndLine) {
+  const std::string p = "[[point]]\nW_over_d = 4\nvalue = 80\nuncertainty = 2\n";
+  auto expect_error = [](const std::string& tail, const std::string& key, int line) {
+    try {
+      (void)parse(tail);
+      ADD_FAILURE() << "accepted: " << tail;
+    } catch (const ScenarioError& e) {
+      EXPECT_EQ(e.key(), key) << e.what();
+      EXPECT_EQ(e.where().line, line) << e.what();
+    }
+  };
+  expect_error(p + "[[point]]\nW_over_d = 4\nobservable = \"j_fast\"\nvalue = 80\nuncertainty = 2\n",
+               "point.observable", kHeadLines + 7);
+  // A spread is fitted on a log scale: it must be positive.
+  expect_error(p + "[[point]]\nW_over_d = 4\nobservable = \"exit_spread\"\nvalue = -1\nuncertainty = 2\n",
+               "point.value", kHeadLines + 8);
+}
+
+RunRecord run_with_crossings(const std::vector<double>& t, const std::vector<double>& x_m) {
+  RunRecord r;
+  for (std::size_t i = 0; i < t.size(); ++i) r.crossings.push_back({static_cast<int>(i), t[i], x_m[i]});
+  return r;
+}
+
+TEST(ObserveCrossings, ArrivalOffsetAndSpreadFromKnownCrossings) {
+  // Run k: crossings at 1 + k, 2 + k, 3 + k s; x = -2, 0, 4 + k mm.
+  std::vector<RunRecord> runs;
+  for (int k = 0; k < 3; ++k) runs.push_back(run_with_crossings({1.0 + k, 2.0 + k, 3.0 + k}, {-0.002, 0.0, 0.004 + 0.001 * k}));
+  const PointObservable arrival = observe(ObservableKind::front_arrival, FitScale::log, runs);
+  ASSERT_TRUE(arrival.valid);
+  EXPECT_NEAR(arrival.value, 2.0, 1e-12);                      // mean of 1, 2, 3 s
+  EXPECT_NEAR(arrival.se_fit, (1.0 / std::sqrt(3.0)) / 2.0, 1e-12);  // se 1/sqrt(3) s, relative
+  EXPECT_NEAR(arrival.replicate_fit[2], std::log(3.0), 1e-12);
+
+  const PointObservable offset = observe(ObservableKind::exit_offset, FitScale::linear, runs);
+  ASSERT_TRUE(offset.valid);
+  EXPECT_NEAR(offset.value, 1.0, 1e-9);  // per run (2 + k)/3 mm: 2/3, 1, 4/3
+  EXPECT_NEAR(offset.se_fit, (1.0 / 3.0) / std::sqrt(3.0), 1e-9);
+
+  const PointObservable spread = observe(ObservableKind::exit_spread, FitScale::log, runs);
+  ASSERT_TRUE(spread.valid);
+  double expected = 0;
+  for (int k = 0; k < 3; ++k) expected += summarize({-2.0, 0.0, 4.0 + k}).sd / 3;
+  EXPECT_NEAR(spread.value, expected, 1e-9);
+
+  // A run in which nothing crossed has no arrival: the point is not valid.
+  runs.push_back(RunRecord{});
+  EXPECT_FALSE(observe(ObservableKind::front_arrival, FitScale::log, runs).valid);
+}
+
+TEST(EffectTermResponse, InterpolatesMeasuredSizesAndExtendsTheEndSegments) {
+  // Point 0: shift 2 at offset 2 (slope 1), then measured 3 at 4 and -2 at -1.
+  EffectTerm t = EffectTerm::single_step("e", "k", 0.0, -1.0, 6.0, 2.0, {1.0}, {0.1});
+  t.add_size(4.0, {3.0}, {0.2});
+  t.add_size(-1.0, {-2.0}, {0.3});
+  double var = -1;
+  EXPECT_NEAR(t.response(0, 0.0, var), 0.0, 1e-12);
+  EXPECT_NEAR(var, 0.0, 1e-12);  // neutral: no shift, no uncertainty
+  EXPECT_NEAR(t.response(0, 1.0, var), 1.0, 1e-12);
+  EXPECT_NEAR(var, std::pow(0.5 * 0.2, 2), 1e-12);  // halfway to the step (se 0.1 x 2)
+  EXPECT_NEAR(t.response(0, 3.0, var), 2.5, 1e-12);
+  EXPECT_NEAR(t.response(0, 6.0, var), 4.0, 1e-12);    // beyond the last size: slope of 2 -> 4
+  EXPECT_NEAR(t.response(0, -0.5, var), -1.0, 1e-12);
+  EXPECT_NEAR(t.response(0, -2.0, var), -4.0, 1e-12);  // below the first: slope of -1 -> 0
+  EXPECT_NEAR(t.slope[0], 1.0, 1e-12);                 // the signature stays the first step's
+}
+
+TEST(EvaluatorObservables, PointsOnTheSameRunsCostNoExtraRuns) {
+  TempDir dir("gapflow_observables");
+  const DataFile d = parse(kFourPoints);
+  Store store(dir / "runs.sqlite");
+  EvaluatorOptions eo;
+  eo.workers = 2;
+  Evaluator ev(d, store, eo);
+  const std::vector<Prediction> p = ev.evaluate({ParameterSet{}});
+  EXPECT_EQ(ev.runs_simulated(), 4);  // 2 design points x 2 replicates, not 4 points x 2
+  ASSERT_EQ(p.front().valid.size(), 4u);
+  for (bool v : p.front().valid) EXPECT_TRUE(v);
+  // The packing rests against the barrier at the gap line: the first sphere crosses
+  // within a fraction of a second of its opening, and inside the gap.
+  EXPECT_GT(p.front().value[1], 0.005);
+  EXPECT_LT(p.front().value[1], 1.0);
+  EXPECT_LT(std::abs(p.front().value[2]), 2 * 7.75);  // |offset| < W/2 = 2 d
+  EXPECT_GT(p.front().value[3], 0.0);
+}
+
+}  // namespace
+}  // namespace gapflow
