@@ -56,10 +56,13 @@ void add_scenario_args(CLI::App* cmd, ScenarioArgs& a) {
 }
 
 // Load, validate and compile; errors carry file:line:column and the key.
-CompiledScenario load_and_compile(const ScenarioArgs& a) {
+// With a model: also what that model cannot run (check_model_supports), located like the rest.
+CompiledScenario load_and_compile(const ScenarioArgs& a, std::optional<ModelKind> model = std::nullopt) {
   LoadedScenario loaded = load_scenario(a.file, a.overrides);
   try {
-    return compile_scenario(loaded.def);
+    CompiledScenario sc = compile_scenario(loaded.def);
+    if (model) check_model_supports(sc, *model);
+    return sc;
   } catch (const ScenarioInvalid& e) {
     throw locate(e, loaded);
   }
@@ -125,7 +128,7 @@ void print_replicate_table(const std::vector<RunRecord>& records) {
 int cmd_run(const ScenarioArgs& a, const std::string& model_name, const std::string& out_path, bool quiet,
             int replicates, int jobs, const RunOutputOptions& output_options) {
   const ModelKind kind = parse_model_kind(model_name);
-  const CompiledScenario sc = load_and_compile(a);
+  const CompiledScenario sc = load_and_compile(a, kind);
   const RunOutputDef output_def = output_options.resolved();
   if (replicates > 1) {
     if (!out_path.empty()) throw std::invalid_argument("--out writes one run record: use it without --replicates");

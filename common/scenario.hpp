@@ -149,6 +149,8 @@ struct Box2DDef {
   double engine_diameter = 1.0;     // engine length units per nominal particle diameter (Froude scaling)
   double rolling_contact = 0.0;     // fraction (0-1) of the derived vertical sliding friction at contacts of
                                     // rolling spheres (RollingContactEffect); 0 = off. 2D only: 3D has it natively
+  double spin_inertia_factor = 0.4; // I/(m r^2) about the board normal with rolling off: 0.4 a solid sphere
+                                    // (Janda's beads), 0.5 a flat disc (To's disks); rolling on uses its own
   Box2DRollingDef rolling;
   Box2DBaseFrictionDef base_friction;
 };

@@ -264,7 +264,8 @@ void read_scenario_section(Section s, ScenarioDef& d) {
 }
 
 void read_plane(Section s, PlaneDef& p) {
-  s.number("incline_deg", p.incline_deg, upper_open(0, 60, "deg"));
+  // Up to a vertical silo (90); whether spheres still roll there is checked when compiling.
+  s.number("incline_deg", p.incline_deg, closed(0, 90, "deg"));
   s.number("length_mm", p.length_mm, lower_open(0, kMaxLengthMm, "mm"));
   s.number("width_mm", p.width_mm, lower_open(0, kMaxLengthMm, "mm"));
   s.number("lateral_tilt_deg", p.lateral_tilt_deg, closed(-10, 10, "deg"));
@@ -529,6 +530,7 @@ void read_box2d(Section s, Box2DDef& b) {
   s.boolean("continuous_collision", b.continuous_collision);
   s.number("engine_diameter", b.engine_diameter, closed(0.05, 20));
   s.number("rolling_contact", b.rolling_contact, closed(0, 1, "fraction of the derived force"));
+  s.number("spin_inertia_factor", b.spin_inertia_factor, lower_open(0, 1));
   Section rolling = s.section("rolling");
   Section base = s.section("base_friction");
   s.finish();
@@ -540,6 +542,10 @@ void read_box2d(Section s, Box2DDef& b) {
   if (b.rolling_contact > 0 && !b.rolling.enabled)
     s.fail_value("rolling_contact", toml_double(b.rolling_contact),
                  "must be 0 when model.box2d.rolling.enabled = false (the effect acts through the rolling spin)");
+  // A rolling sphere's inertia is the rolling effect's: a second value would contradict it.
+  if (b.rolling.enabled && b.spin_inertia_factor != Box2DDef{}.spin_inertia_factor)
+    s.fail_value("spin_inertia_factor", toml_double(b.spin_inertia_factor),
+                 "applies only with model.box2d.rolling.enabled = false (rolling spheres use rolling.inertia_factor)");
 
   base.boolean("enabled", b.base_friction.enabled);
   if (auto m = base.choice<BaseFrictionMethod>("method", {{"force", BaseFrictionMethod::force},
@@ -794,6 +800,9 @@ void write_model(TomlWriter& w, const ModelDef& m) {
   w.put("continuous_collision", m.box2d.continuous_collision);
   w.put("engine_diameter", m.box2d.engine_diameter);
   if (m.box2d.rolling_contact != 0) w.put("rolling_contact", m.box2d.rolling_contact);
+  // Written only when set, so that the hashes (job keys) of earlier scenarios stay what they were.
+  if (m.box2d.spin_inertia_factor != Box2DDef{}.spin_inertia_factor)
+    w.put("spin_inertia_factor", m.box2d.spin_inertia_factor);
   w.section("model.box2d.rolling");
   w.put("enabled", m.box2d.rolling.enabled);
   w.put("inertia_factor", m.box2d.rolling.inertia_factor);

@@ -15,6 +15,7 @@ class Session2D final : public EngineSession {
  public:
   explicit Session2D(const CompiledScenario& sc) : sc_(sc), effects_(make_effects2d(sc)) {
     BodyModel2D model;
+    model.spin_inertia_factor = sc.def.model.box2d.spin_inertia_factor;  // the rolling effect overrides it
     for (const auto& e : effects_) e->shape_bodies(model);
     w_ = build_world2d(sc, model);
     for (const auto& e : effects_) e->attach(*w_);

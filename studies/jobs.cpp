@@ -133,6 +133,7 @@ Job make_job(const StudyDef& study, const SeriesDef& s, const std::string& scena
     LoadedScenario loaded = parse_scenario(scenario_text, s.scenario.string(), job.overrides);
     try {
       const CompiledScenario sc = compile_scenario(loaded.def);
+      check_model_supports(sc, model);
       job.id.scenario_hash = sc.scenario_hash;
       job.id.run_seed = sc.run_seed;
       job.expected_cost = expected_run_cost(sc, model);

@@ -79,7 +79,8 @@ const BadCase kBadCases[] = {
     {"rolling_resistance_1", kHead + "[particles]\nrolling_resistance = 1.0\n", "particles.rolling_resistance", 4},
     {"nan", kHead + "[plane]\nincline_deg = nan\n", "plane.incline_deg", 4},
     {"inf", kHead + "[plane]\nlength_mm = inf\n", "plane.length_mm", 4},
-    {"incline_60", kHead + "[plane]\nincline_deg = 60\n", "plane.incline_deg", 4},
+    {"incline_91", kHead + "[plane]\nincline_deg = 91\n", "plane.incline_deg", 4},
+    {"spin_inertia_with_rolling", kHead + "[model.box2d]\nspin_inertia_factor = 0.5\n", "model.box2d.spin_inertia_factor", 4},
     {"wall_angle_0", kHead + "[bottleneck]\nwall_angle_deg = 0\n", "bottleneck.wall_angle_deg", 4},
     {"lattice_gap_2", kHead + "[release]\nlattice_gap = 2\n", "release.lattice_gap", 4},
     {"settle_61", kHead + "[release]\nsettle_s = 61\n", "release.settle_s", 4},
@@ -439,7 +440,7 @@ ScenarioDef all_fields_changed() {
   d.shaking.obstruction = {true, 1.0, -45.0, false, 0.25, 0.5, 0.1, 7.5};
   d.run = {gapflow::EndCondition::time_limit, 120.0, 400, 2.5, 10.0, 7, 1234567890123ull, 3};
   d.protocol = {gapflow::ClogBreaking::local_perturbation, true, 4.5};
-  d.model.box2d = {0.0004, 12, 4, true, true, 2.5, 0.0, {false, 2.0 / 3.0}, {false, gapflow::BaseFrictionMethod::joint}};
+  d.model.box2d = {0.0004, 12, 4, true, true, 2.5, 0.0, 0.5, {false, 2.0 / 3.0}, {false, gapflow::BaseFrictionMethod::joint}};
   d.model.bullet = {0.0005, 4, 50, true, 10.0, 3.5, 0.05};
   // (model.box2d.rolling_contact needs rolling on: its round trip is in tests/test_rolling_contact.cpp)
   return d;
@@ -581,6 +582,19 @@ TEST(ScenarioCompile, DefaultGapTooWideIsLocatedAtItsSection) {
   EXPECT_EQ(e->key(), "bottleneck.gap_mm") << e->what();
   EXPECT_EQ(e->where().line, 3) << e->what();
   EXPECT_NE(e->value().find("(default)"), std::string::npos) << e->what();
+}
+
+TEST(ScenarioCompile, RollingSpheresOnABoardTooSteepToRollOnAreRefused) {
+  // A solid sphere rolls without slipping while mu_base >= 2/7 tan(theta): up to 40.0 deg at mu_base 0.24.
+  EXPECT_FALSE(compile_error(kHead + "[plane]\nincline_deg = 40\n"));
+  auto e = compile_error(kHead + "[plane]\nincline_deg = 41\n");
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->key(), "plane.incline_deg") << e->what();
+  EXPECT_EQ(e->where().line, 4) << e->what();
+  EXPECT_NE(std::string(e->what()).find("at most 40.0 deg"), std::string::npos) << e->what();
+  // More board friction lets them roll on a steeper board; with rolling off, a vertical silo is allowed.
+  EXPECT_FALSE(compile_error(kHead + "[plane]\nincline_deg = 50\n[particles]\nfriction_base = 0.5\n"));
+  EXPECT_FALSE(compile_error(kHead + "[plane]\nincline_deg = 90\n[model.box2d.rolling]\nenabled = false\n"));
 }
 
 TEST(ScenarioCompile, ObstructionOverlappingAWallIsLocatedAtItsDistance) {
