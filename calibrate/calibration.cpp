@@ -10,10 +10,44 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <map>
 
 namespace gapflow {
 
 namespace {
+
+// Points that measure different observables on the same runs have correlated
+// noise, which the chi^2 (a sum over points) ignores. Measured here, per pair of
+// observables, on the baseline nodes' replicates (each point's values centred per
+// node, pooled over the point pairs), and logged so that a reader can judge it.
+std::vector<std::string> shared_run_correlations(const DataFile& data, const BaselineFit& base) {
+  std::map<std::pair<ObservableKind, ObservableKind>, std::pair<std::vector<double>, std::vector<double>>> pooled;
+  for (std::size_t i = 0; i < data.points.size(); ++i)
+    for (std::size_t j = i + 1; j < data.points.size(); ++j) {
+      if (data.points[i].design != data.points[j].design) continue;
+      auto& [a, b] = pooled[{data.points[i].observable, data.points[j].observable}];
+      for (const Prediction& p : base.node_predictions) {
+        const std::vector<double>& x = p.replicate_fit[i];
+        const std::vector<double>& y = p.replicate_fit[j];
+        std::vector<double> xs, ys;
+        for (std::size_t r = 0; r < std::min(x.size(), y.size()); ++r)
+          if (x[r] == x[r] && y[r] == y[r]) xs.push_back(x[r]), ys.push_back(y[r]);
+        if (xs.size() < 2) continue;
+        const double mx = summarize(xs).mean, my = summarize(ys).mean;
+        for (std::size_t r = 0; r < xs.size(); ++r) a.push_back(xs[r] - mx), b.push_back(ys[r] - my);
+      }
+    }
+  std::vector<std::string> out;
+  for (const auto& [kinds, v] : pooled) {
+    const auto& [a, b] = v;
+    double sab = 0, saa = 0, sbb = 0;
+    for (std::size_t r = 0; r < a.size(); ++r) sab += a[r] * b[r], saa += a[r] * a[r], sbb += b[r] * b[r];
+    if (saa <= 0 || sbb <= 0) continue;
+    out.push_back(fmt::format("{} / {}: rho = {:+.2f} over {} replicate pairs", to_string(kinds.first),
+                              to_string(kinds.second), sab / std::sqrt(saa * sbb), a.size()));
+  }
+  return out;
+}
 
 // Paired replicate differences (moved - base) at point i over the baseline's
 // nodes, divided by `per`: moved[first + n] is node n moved.
@@ -280,6 +314,11 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   loop.say(fmt::format("baseline {}: chi2/nu = {:.2f} (p = {:.3g}) on {} fitted points; held-out RMS {:.2f} sigma",
                        base.params.label(), out.before.fitted.chi.per_dof(), out.before.fitted.chi.p,
                        out.before.fitted.n, out.before.held_out.rms_whitened));
+
+  const std::vector<std::string> correlations = shared_run_correlations(data, base);
+  if (!correlations.empty())
+    loop.say(fmt::format("observables on the same runs, correlation of their replicate values (chi^2 treats them as "
+                         "independent): {}", fmt::join(correlations, "; ")));
 
   // 2.-4. Rounds of attribution.
   std::vector<EffectTerm> terms;

@@ -14,9 +14,10 @@ const std::vector<EffectDef>& effect_catalogue() {
   // size anywhere in the range is at most ~2 steps from the neutral value.
   static const std::vector<EffectDef> catalogue{
       {"rolling_resistance", "particles.rolling_resistance", "",
-       "resistance from the board, a force mu_r m g cos(theta) against the velocity", 0.0, 0.02, 0.01},
+       "resistance from the board, a force mu_r m g cos(theta) against the velocity", 0.0, 0.02, 0.01, true, true,
+       false, true},
       {"spinning_friction", "particles.spinning_friction_mm", "mm",
-       "torsional friction about the board normal, torque s m g cos(theta)", 0.0, 1.0, 0.5},
+       "torsional friction about the board normal, torque s m g cos(theta)", 0.0, 1.0, 0.5, true, true, false, true},
       {"wall_friction", "particles.friction_wall", "",
        "Coulomb friction against walls and obstruction different from particle-particle friction", 0.05, 0.8,
        0.3},
@@ -24,7 +25,8 @@ const std::vector<EffectDef>& effect_catalogue() {
        0.0, 0.2, 0.1},
       {"restitution", "particles.restitution", "", "pair coefficient of restitution", 0.0, 0.95, -0.4},
       {"lateral_tilt", "plane.lateral_tilt_deg", "deg",
-       "the board rolled about its fall line: gravity g cos(theta) sin(phi) across the channel", 0.0, 6.0, 4.0},
+       "the board rolled about its fall line: gravity g cos(theta) sin(phi) across the channel", 0.0, 6.0, 4.0, true,
+       true, false, true},
       {"gap_offset", "bottleneck.gap_offset_mm", "mm",
        "the wall tips stand further apart than drawn (effective gap W + delta)", -3.0, 3.0, 1.5},
       {"linear_drag", "particles.drag_per_s", "1/s",
@@ -37,7 +39,7 @@ const std::vector<EffectDef>& effect_catalogue() {
       {"rolling_contact", "model.box2d.rolling_contact", "",
        "vertical sliding friction at contacts of rolling spheres (a pushing pair rubs at 2v), as a fraction "
        "of the derived force",
-       0.0, 1.0, 0.5, true, false},
+       0.0, 1.0, 0.5, true, false, false, true, true},
   };
   return catalogue;
 }
@@ -52,13 +54,18 @@ bool effect_applies(const EffectDef& effect, ModelKind model, const DataFile& da
   if (model == ModelKind::box2d ? !effect.in_2d : !effect.in_3d) return false;
   for (const FreeParameter& f : data.free)
     if (f.key == effect.key) return false;
-  if (!effect.needs_polygon_obstruction) return true;
+  bool polygon = false, board = false, rolling = false;
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     const ScenarioDef def = data.point_scenario(i).def;
-    if (def.obstruction.shape == ObstructionShape::triangle || def.obstruction.shape == ObstructionShape::polygon)
-      return true;
+    polygon = polygon || def.obstruction.shape == ObstructionShape::triangle ||
+              def.obstruction.shape == ObstructionShape::polygon;
+    board = board || def.plane.incline_deg < 90;
+    rolling = rolling || def.model.box2d.rolling.enabled;
   }
-  return false;
+  if (effect.needs_polygon_obstruction && !polygon) return false;
+  if (effect.acts_through_board && !board) return false;
+  if (effect.needs_rolling && model == ModelKind::box2d && !rolling) return false;
+  return true;
 }
 
 bool key_applies_to(const std::string& key, const ScenarioDef& point) {

@@ -25,6 +25,8 @@ struct EffectDef {
   bool in_2d = true;      // the 2D model has it
   bool in_3d = true;      // the 3D model has it
   bool needs_polygon_obstruction = false;  // only visible when some design point has a triangle/polygon obstruction
+  bool acts_through_board = false;  // its force is m g cos(theta) x something: nothing in a vertical silo
+  bool needs_rolling = false;       // the 2D model's rolling spheres carry it (refused with rolling off)
 };
 
 // The catalogue, in a fixed order.
@@ -33,7 +35,9 @@ const std::vector<EffectDef>& effect_catalogue();
 const EffectDef* find_effect(const std::string& name);
 
 // Whether `effect` can show in this model and design (a corner radius needs a
-// polygonal obstruction somewhere; a free parameter of the data file is no effect).
+// polygonal obstruction somewhere; a board's friction or tilt needs a point whose
+// board is not vertical; the rolling contact needs rolling spheres; a free
+// parameter of the data file is no effect).
 bool effect_applies(const EffectDef& effect, ModelKind model, const DataFile& data);
 
 // Whether setting `key` means anything at a point with this scenario: a corner

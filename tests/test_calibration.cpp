@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <iostream>
 #include <thread>
@@ -220,6 +221,28 @@ TEST(DataFile, ShippedFilesLoadWithProvenance) {
     EXPECT_FALSE(d.source.uncertainty.empty()) << f;
     EXPECT_GE(d.points.size(), 10u) << f;
   }
+  // Measured data (issue 14, case B): provenance and the numbers as in ../shared/data.
+  const DataFile janda = load_data_file(source_path("data/silo/janda2008.toml"));
+  EXPECT_EQ(janda.source.method, "digitized");
+  EXPECT_NE(janda.source.citation.find("Janda"), std::string::npos);
+  ASSERT_EQ(janda.points.size(), 4u);
+  EXPECT_EQ(janda.points.front().observable, ObservableKind::ln_s_plus_1);
+  EXPECT_NEAR(janda.points.front().value, 1.30, 1e-12);
+  EXPECT_NEAR(janda.point_scenario(3).def.bottleneck.gap_mm, std::sqrt(9.18), 1e-3);  // W/d = sqrt(D2), d = 1 mm
+  EXPECT_EQ(janda.point_scenario(0).def.plane.incline_deg, 90.0);
+}
+
+TEST(EffectCatalogue, BoardEffectsDoNotApplyInAVerticalSilo) {
+  // Nothing presses a bead on the plates of a vertical cell: the board's resistance, spin
+  // friction and tilt act through m g cos(90 deg) = 0, and the rolling contact needs rolling.
+  const DataFile silo = load_data_file(source_path("data/silo/janda2008.toml"));
+  const DataFile board = load_data_file(source_path("data/blind/design.toml"));
+  for (const char* name : {"rolling_resistance", "spinning_friction", "lateral_tilt", "rolling_contact"}) {
+    EXPECT_FALSE(effect_applies(*find_effect(name), ModelKind::box2d, silo)) << name;
+    EXPECT_TRUE(effect_applies(*find_effect(name), ModelKind::box2d, board)) << name;
+  }
+  for (const char* name : {"wall_friction", "restitution", "size_scatter", "gap_offset", "linear_drag"})
+    EXPECT_TRUE(effect_applies(*find_effect(name), ModelKind::box2d, silo)) << name;
 }
 
 TEST(EffectCatalogue, EveryEntryIsAScenarioKeyWithARangeAndAStep) {
