@@ -40,6 +40,8 @@ struct CalibrationDef {
   int grid_max = 9;                // grid nodes of a one-parameter baseline fit
   int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)
   std::uint64_t fresh_seed_offset = 7919;  // run.seed offset of the fresh-seed re-score
+  double decisive_bic = 10;        // a BIC drop this large (Bayes factor ~150) lets the held-out chi^2 rise
+                                   // within its own noise, sqrt(2 n_held_out), instead of having to fall
 };
 
 // How far the model is from the data on one subset of points.
