@@ -62,24 +62,6 @@ void convert_units(const ScenarioDef& def, CompiledScenario& c) {
   c.density = def.particles.density_kg_m3;
 }
 
-// The 2D model's rolling reduction holds only while the board's friction can
-// supply the torque: a sphere of inertia factor k rolls without slipping while
-// mu_base >= k/(1+k) tan(theta) (2/7 tan(theta) for a solid sphere: up to 40 deg
-// at mu_base 0.24). Beyond it spheres slide, and at 90 deg (a vertical silo)
-// nothing presses them on the board: the scenario must say so.
-void check_rolling_holds(const ScenarioDef& d) {
-  const Box2DRollingDef& r = d.model.box2d.rolling;
-  if (!r.enabled) return;
-  const double k = r.inertia_factor, mu = d.particles.friction_base;
-  const double limit_deg = std::atan(mu * (1 + k) / k) * 180.0 / kPi;
-  if (d.plane.incline_deg <= limit_deg) return;
-  throw ScenarioInvalid("plane.incline_deg", num(d.plane.incline_deg),
-                        fmt::format("at most {:.1f} deg while model.box2d.rolling.enabled = true: spheres roll without "
-                                    "slipping only while tan(theta) <= particles.friction_base (1+k)/k = {:.3g} (k = "
-                                    "{:g}); steeper, set model.box2d.rolling.enabled = false (a vertical silo)",
-                                    limit_deg, mu * (1 + k) / k, k));
-}
-
 // --- Stage 2: walls ----------------------------------------------------------
 void build_walls(CompiledScenario& c) {
   const ScenarioDef& d = c.def;
@@ -419,7 +401,6 @@ CompiledScenario compile_scenario(const ScenarioDef& def) {
   c.scenario_hash = scenario_hash(def);
   c.run_seed = run_seed(c.scenario_hash, def.run.seed, def.run.replicate);
   convert_units(def, c);
-  check_rolling_holds(def);
   build_walls(c);
   place_obstruction(c);
   check_obstruction_clearance(c);

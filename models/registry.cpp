@@ -3,9 +3,11 @@
 #include "sim2d/model2d.hpp"
 #include "sim3d/model3d.hpp"
 #include "common/scenario_loader.hpp"
+#include "common/units.hpp"
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <stdexcept>
 
 namespace gapflow {
@@ -18,10 +20,33 @@ ModelKind parse_model_kind(const std::string& name) {
 
 const char* to_string(ModelKind kind) { return kind == ModelKind::box2d ? "2d" : "3d"; }
 
+namespace {
+
+// The 2D model's rolling reduction holds only while the board's friction can
+// supply the torque: a sphere of inertia factor k rolls without slipping while
+// mu_base >= k/(1+k) tan(theta) (2/7 tan(theta) for a solid sphere: up to 40 deg
+// at mu_base 0.24). Beyond it spheres slide, and at 90 deg (a vertical silo)
+// nothing presses them on the board: the scenario must say so.
+void check_rolling_holds(const ScenarioDef& d) {
+  const Box2DRollingDef& r = d.model.box2d.rolling;
+  if (!r.enabled) return;
+  const double k = r.inertia_factor, mu = d.particles.friction_base;
+  const double limit_deg = std::atan(mu * (1 + k) / k) * 180.0 / kPi;
+  if (d.plane.incline_deg <= limit_deg) return;
+  throw ScenarioInvalid("plane.incline_deg", fmt::format("{:g}", d.plane.incline_deg),
+                        fmt::format("at most {:.1f} deg while model.box2d.rolling.enabled = true: spheres roll without "
+                                    "slipping only while tan(theta) <= particles.friction_base (1+k)/k = {:.3g} (k = "
+                                    "{:g}); steeper, set model.box2d.rolling.enabled = false (a vertical silo)",
+                                    limit_deg, mu * (1 + k) / k, k));
+}
+
+}  // namespace
+
 // What a model cannot run, said before it runs. The 3D board has no cover plate
 // yet: on a board steeper than 60 deg spheres are barely pressed onto it, and at
 // 90 deg nothing keeps them there (a quasi-2D cell needs the plate).
 void check_model_supports(const CompiledScenario& scenario, ModelKind kind) {
+  if (kind == ModelKind::box2d) check_rolling_holds(scenario.def);
   if (kind == ModelKind::bullet && scenario.def.plane.incline_deg > 60)
     throw ScenarioInvalid("plane.incline_deg", fmt::format("{:g}", scenario.def.plane.incline_deg),
                           "at most 60 deg for the 3D model (it has no cover plate to hold spheres on a steeper board); "

@@ -14,7 +14,8 @@ enum class ModelKind { box2d, bullet };
 ModelKind parse_model_kind(const std::string& name);
 const char* to_string(ModelKind kind);  // "2d" | "3d"
 
-// Throws ScenarioInvalid when the model cannot run the scenario (the 3D model above 60 deg).
+// Throws ScenarioInvalid when the model cannot run the scenario: the 2D rolling reduction where
+// spheres would slip, the 3D model above 60 deg.
 void check_model_supports(const CompiledScenario& scenario, ModelKind kind);
 std::unique_ptr<EngineSession> make_session(const CompiledScenario& scenario, ModelKind kind);
 

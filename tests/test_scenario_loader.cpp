@@ -584,19 +584,6 @@ TEST(ScenarioCompile, DefaultGapTooWideIsLocatedAtItsSection) {
   EXPECT_NE(e->value().find("(default)"), std::string::npos) << e->what();
 }
 
-TEST(ScenarioCompile, RollingSpheresOnABoardTooSteepToRollOnAreRefused) {
-  // A solid sphere rolls without slipping while mu_base >= 2/7 tan(theta): up to 40.0 deg at mu_base 0.24.
-  EXPECT_FALSE(compile_error(kHead + "[plane]\nincline_deg = 40\n"));
-  auto e = compile_error(kHead + "[plane]\nincline_deg = 41\n");
-  ASSERT_TRUE(e);
-  EXPECT_EQ(e->key(), "plane.incline_deg") << e->what();
-  EXPECT_EQ(e->where().line, 4) << e->what();
-  EXPECT_NE(std::string(e->what()).find("at most 40.0 deg"), std::string::npos) << e->what();
-  // More board friction lets them roll on a steeper board; with rolling off, a vertical silo is allowed.
-  EXPECT_FALSE(compile_error(kHead + "[plane]\nincline_deg = 50\n[particles]\nfriction_base = 0.5\n"));
-  EXPECT_FALSE(compile_error(kHead + "[plane]\nincline_deg = 90\n[model.box2d.rolling]\nenabled = false\n"));
-}
-
 TEST(ScenarioCompile, ObstructionOverlappingAWallIsLocatedAtItsDistance) {
   auto e = compile_error(kHead +
                          "[obstruction]\nshape = \"cylinder\"\ndiameter_mm = 100\n"

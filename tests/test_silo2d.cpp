@@ -115,6 +115,27 @@ TEST(VerticalSilo2D, ANarrowFlatBottomedSiloClogs) {
   EXPECT_GT(wide.passed, 250);
 }
 
+TEST(VerticalSilo2D, RollingSpheresOnABoardTooSteepToRollOnAreRefused) {
+  // A solid sphere rolls without slipping while mu_base >= 2/7 tan(theta): up to 40.0 deg at
+  // mu_base 0.24. A 2D-model check: the 3D model has no rolling reduction to break.
+  const std::string board = "[scenario]\nname = \"b\"\n[particles]\ncount = 5\n";
+  EXPECT_NO_THROW(check_model_supports(compile_text(board, {"plane.incline_deg=40"}), ModelKind::box2d));
+  try {
+    check_model_supports(compile_text(board, {"plane.incline_deg=41"}), ModelKind::box2d);
+    ADD_FAILURE() << "41 deg accepted";
+  } catch (const ScenarioInvalid& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 40.0 deg"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(check_model_supports(compile_text(board, {"plane.incline_deg=41"}), ModelKind::bullet));
+  // More board friction lets them roll on a steeper board; with rolling off, a vertical silo is allowed.
+  EXPECT_NO_THROW(check_model_supports(
+      compile_text(board, {"plane.incline_deg=50", "particles.friction_base=0.5"}), ModelKind::box2d));
+  EXPECT_NO_THROW(check_model_supports(compile_text(falling_sphere()), ModelKind::box2d));
+  // A frictionless board: a 3D sphere slides (tests/test_sim3d.cpp); the 2D rolling reduction is refused.
+  EXPECT_THROW(check_model_supports(compile_text(board, {"particles.friction_base=0"}), ModelKind::box2d),
+               ScenarioInvalid);
+}
+
 TEST(VerticalSilo3D, TheThreeDModelRefusesABoardSteeperThan60Degrees) {
   const CompiledScenario sc = compile_text(falling_sphere());
   EXPECT_THROW(check_model_supports(sc, ModelKind::bullet), ScenarioInvalid);
