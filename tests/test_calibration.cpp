@@ -142,26 +142,10 @@ TEST(Attribution, ChiSquareOfWhitenedResidual) {
 // ---------------------------------------------------------------------------
 // Data files.
 
-const char* kDataHead = R"(
-[data]
-name = "t"
-[source]
-citation = "test"
-method = "simulated"
-uncertainty = "se of 10 runs"
-[model]
-scenario = "scenarios/paper/no_obstruction_medium.toml"
-set = ["particles.count=40"]
-[observable]
-kind = "j_mid"
-[[design]]
-column = "W_over_d"
-key = "bottleneck.gap_mm"
-unit = "d"
-)";
+const std::string kDataHead = testing::data_file_head("set = [\"particles.count=40\"]\n");
 
 DataFile parse(const std::string& tail) {
-  return parse_data_file(std::string(kDataHead) + tail, "t.toml", source_path(""));
+  return parse_data_file(kDataHead + tail, "t.toml", source_path(""));
 }
 
 TEST(DataFile, LoadsInlinePointsAndConvertsDiameters) {

@@ -18,27 +18,11 @@ namespace {
 using testing::source_path;
 using testing::TempDir;
 
-const char* kHead = R"(
-[data]
-name = "t"
-[source]
-citation = "test"
-method = "simulated"
-uncertainty = "se of 10 runs"
-[model]
-scenario = "scenarios/paper/no_obstruction_medium.toml"
-set = ["particles.count=30", "run.time_limit_s=10"]
-replicates = 2
-[observable]
-kind = "j_mid"
-[[design]]
-column = "W_over_d"
-key = "bottleneck.gap_mm"
-unit = "d"
-)";
+const std::string kHead =
+    testing::data_file_head("set = [\"particles.count=30\", \"run.time_limit_s=10\"]\nreplicates = 2\n");
 constexpr int kHeadLines = 17;  // kHead's lines (the first is empty)
 
-DataFile parse(const std::string& tail) { return parse_data_file(std::string(kHead) + tail, "t.toml", source_path("")); }
+DataFile parse(const std::string& tail) { return parse_data_file(kHead + tail, "t.toml", source_path("")); }
 
 const std::string kFourPoints =
     "[[point]]\nW_over_d = 4\nvalue = 80\nuncertainty = 2\n"

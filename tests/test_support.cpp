@@ -8,6 +8,12 @@
 
 namespace gapflow::testing {
 
+std::string data_file_head(const std::string& model_lines) {
+  return "\n[data]\nname = \"t\"\n[source]\ncitation = \"test\"\nmethod = \"simulated\"\nuncertainty = \"se of 10 runs\"\n"
+         "[model]\nscenario = \"scenarios/paper/no_obstruction_medium.toml\"\n" +
+         model_lines + "[observable]\nkind = \"j_mid\"\n[[design]]\ncolumn = \"W_over_d\"\nkey = \"bottleneck.gap_mm\"\nunit = \"d\"\n";
+}
+
 std::filesystem::path source_path(const std::string& relative) {
   return std::filesystem::path(GAPFLOW_SOURCE_DIR) / relative;
 }

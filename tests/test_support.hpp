@@ -19,6 +19,10 @@ CompiledScenario compile_text(const std::string& toml, const std::vector<std::st
 // A board far larger than the particles (3000 x 600 mm, gap 300 mm, barrier at 1500 mm, no
 // settling, equal medium spheres), for tests that place particles by hand.
 std::string open_board_scenario(const std::string& name, int count, double incline_deg = 8.0);
+// The head of a calibration data file for loader tests: [data] to one [[design]] column
+// (W_over_d in d, on the paper's medium template); `model_lines` are the [model] lines after
+// its scenario. 14 lines plus model_lines (the text starts with an empty line).
+std::string data_file_head(const std::string& model_lines);
 // Load and compile a shipped scenario file.
 CompiledScenario compile_file(const std::string& relative, const std::vector<std::string>& overrides = {});
 
