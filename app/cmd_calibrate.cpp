@@ -54,6 +54,7 @@ int print_data_check(const DataFile& data) {
 
 int cmd_calibrate(const CalibrateCommands::Options& o) {
   const DataFile data = load_data_file(o.data_file);
+  check_points_run_in(data, parse_model_kind(o.model));  // exit 2 now, not at the first run
   if (o.check) return print_data_check(data);
   const std::filesystem::path out = o.out.empty() ? std::filesystem::path("results/calibration") / data.name : std::filesystem::path(o.out);
   check_output_folder(out);  // before an hour of runs, not after
@@ -100,6 +101,7 @@ int cmd_twin(const CalibrateCommands::Options& o) {
   TwinDef def;
   def.name = o.name.empty() ? std::filesystem::path(o.out).stem().string() : o.name;
   def.model = parse_model_kind(o.model);
+  check_points_run_in(design, def.model);
   def.seed = o.seed;
   def.effects = o.effects;
   def.set = o.set;

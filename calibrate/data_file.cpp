@@ -339,6 +339,19 @@ DataFile load_data_file(const std::filesystem::path& file) {
   return d;
 }
 
+void check_points_run_in(const DataFile& data, ModelKind model) {
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    const LoadedScenario loaded = data.point_scenario(i);
+    try {
+      check_model_supports(compile_scenario(loaded.def), model);
+    } catch (const ScenarioInvalid& e) {
+      const ScenarioError at = locate(e, loaded);
+      throw ScenarioError(data.points[i].where, at.key(), at.value(),
+                          fmt::format("{} [point {}, {} model]", at.allowed(), data.point_label(i), to_string(model)));
+    }
+  }
+}
+
 std::vector<std::string> DataFile::point_overrides(std::size_t i) const {
   std::vector<std::string> out = set;
   double d_mm = 0;

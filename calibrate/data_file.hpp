@@ -22,6 +22,7 @@
 #pragma once
 
 #include "common/scenario_loader.hpp"
+#include "models/registry.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -118,6 +119,8 @@ struct DataFile {
 };
 
 DataFile load_data_file(const std::filesystem::path& file);
+// Whether `model` can run every point (check_model_supports), as a ScenarioError at the point.
+void check_points_run_in(const DataFile& data, ModelKind model);
 // From text (tests). Paths inside resolve against base_dir.
 DataFile parse_data_file(std::string_view text, std::string_view source_name, const std::filesystem::path& base_dir);
 

@@ -214,6 +214,15 @@ TEST(DataFile, ShippedFilesLoadWithProvenance) {
   EXPECT_NEAR(janda.points.front().value, 1.30, 1e-12);
   EXPECT_NEAR(janda.point_scenario(3).def.bottleneck.gap_mm, std::sqrt(9.18), 1e-3);  // W/d = sqrt(D2), d = 1 mm
   EXPECT_EQ(janda.point_scenario(0).def.plane.incline_deg, 90.0);
+  // The 2D model runs the vertical cell; the 3D model (no cover plate) is refused at the point's line.
+  EXPECT_NO_THROW(check_points_run_in(janda, ModelKind::box2d));
+  try {
+    check_points_run_in(janda, ModelKind::bullet);
+    ADD_FAILURE() << "3D accepted a vertical silo";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.key(), "plane.incline_deg") << e.what();
+    EXPECT_EQ(e.where().line, janda.points.front().where.line) << e.what();
+  }
 }
 
 TEST(EffectCatalogue, BoardEffectsDoNotApplyInAVerticalSilo) {
