@@ -14,10 +14,14 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
 
-CompiledScenario compile_with(const std::string& file, const std::vector<std::string>& overrides) {
+// Loaded, compiled and checked for the model (check_model_supports), errors located: the
+// run thread must never meet a scenario its model refuses.
+CompiledScenario compile_with(const std::string& file, const std::vector<std::string>& overrides, ModelKind model) {
   LoadedScenario loaded = load_scenario(file, overrides);
   try {
-    return compile_scenario(loaded.def);
+    CompiledScenario sc = compile_scenario(loaded.def);
+    check_model_supports(sc, model);
+    return sc;
   } catch (const ScenarioInvalid& e) {
     throw locate(e, loaded);
   }
@@ -87,7 +91,7 @@ std::string key_of(const std::string& assignment) { return assignment.substr(0, 
 }  // namespace
 
 LiveRun::LiveRun(LiveRunDef def) : def_(std::move(def)) {
-  const CompiledScenario sc = compile_with(def_.scenario_file, def_.overrides);  // bad input: exit 2 before serving
+  const CompiledScenario sc = compile_with(def_.scenario_file, def_.overrides, def_.model);  // bad input: exit 2 before serving
   overrides_ = def_.overrides;
   geometry_ = geometry_of(sc, def_.model, overrides_);
   state_ = "\"t\":0";
@@ -141,7 +145,7 @@ std::string LiveRun::apply(const std::string& assignment, bool& restarted) {
   next.push_back(assignment);
   std::optional<CompiledScenario> sc;
   try {
-    sc = compile_with(def_.scenario_file, next);
+    sc = compile_with(def_.scenario_file, next, def_.model);
   } catch (const ScenarioError& e) {
     return e.what();
   }
@@ -177,7 +181,7 @@ void LiveRun::loop() {
       cancel_ = false;
       shaking_.reset();
     }
-    CompiledScenario sc = compile_with(def_.scenario_file, overrides);  // validated when applied
+    CompiledScenario sc = compile_with(def_.scenario_file, overrides, def_.model);  // validated when applied
     {
       std::lock_guard lock(mutex_);
       running_shaking_ = sc.def.shaking;

@@ -95,6 +95,16 @@ try:
     except urllib.error.HTTPError as e:
         body = e.read().decode()
         check(e.code == 400 and "--set:2:19" in body and "gap_mm" in body, f"rejected with the loader's message: {body}")
+    # A setting the model refuses (the 2D rolling reduction on a 45 deg board: the spheres would
+    # slip) is an error for the page, not a crash of the run thread.
+    try:
+        urllib.request.urlopen(urllib.request.Request(base + "/set", data=b"plane.incline_deg=45"), timeout=10)
+        check(False, "a 45 deg board with rolling spheres is rejected")
+    except urllib.error.HTTPError as e:
+        body = e.read().decode()
+        check(e.code == 400 and "incline_deg" in body, f"rejected with the model's message: {body}")
+    check(server.poll() is None, "the server still runs")
+    check(get("/state")["generation"] >= 0, "and answers")
 finally:
     server.terminate()
     server.wait(timeout=10)
