@@ -3,6 +3,7 @@
 #include "calibrate/effect_catalogue.hpp"
 #include "calibrate/fit.hpp"
 #include "common/statistics.hpp"
+#include "common/toml_strict.hpp"
 
 #include <fmt/format.h>
 
@@ -59,7 +60,7 @@ HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Eva
   HeldOutCheck c;
   c.n = static_cast<int>(data.points.size() - data.fitted_count());
   if (c.n == 0) return c;
-  const std::vector<Prediction> p = ev.evaluate({before, after}, data.seed + def.fresh_seed_offset, data.model_replicates);
+  const std::vector<Prediction> p = ev.evaluate({before, after}, data.seed + def.decision_seed_offset, data.model_replicates);
   c.before = chi2_of(data, p[0], true);
   c.after = chi2_of(data, p[1], true);
   return c;
@@ -223,7 +224,13 @@ class Loop {
   // neutral), so that its size is fitted on its measured response, not on a line
   // through one step.
   void refine(EffectTerm& term, const Candidate& c, const BaselineFit& base) {
-    const std::vector<double> offsets = refinement_offsets(c, *find_effect(c.effect));
+    std::vector<double> offsets;
+    for (double da : refinement_offsets(c, *find_effect(c.effect)))
+      if (valid_everywhere(c.key, c.neutral + da)) offsets.push_back(da);
+    // The fit may move the size only where every point still makes a scenario (a gap offset
+    // below -W closes the gap): the range shrinks toward neutral until it does.
+    for (double* bound : {&term.lo, &term.hi})
+      for (int k = 0; k < 20 && !valid_everywhere(c.key, *bound); ++k) *bound = c.neutral + 0.8 * (*bound - c.neutral);
     std::vector<ParameterSet> sets;
     for (double da : offsets)
       for (const ParameterSet& n : base.nodes) sets.push_back(n.with(c.key, c.neutral + da));
@@ -239,6 +246,21 @@ class Loop {
       }
       term.add_size(offsets[k], shift, se);
     }
+  }
+
+  // Whether every point makes a valid scenario with `key` = value (where the key applies).
+  bool valid_everywhere(const std::string& key, double value) const {
+    for (std::size_t i = 0; i < data_.points.size(); ++i) {
+      if (!key_applies_to(key, data_.point_scenario(i).def)) continue;
+      try {
+        (void)compile_scenario(data_.point_scenario(i, {key + "=" + number_text(value)}).def);
+      } catch (const ScenarioError&) {
+        return false;
+      } catch (const ScenarioInvalid&) {
+        return false;
+      }
+    }
+    return true;
   }
 
   // Score the candidates against the state's residual; X = free parameters + added effects.
@@ -367,7 +389,8 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
     const ProfileInterval interval = profile_interval(data, trial, fitted, trial.effects.size() - 1, k_after);
     const bool bic_better = after.bic < state.bic;
     // The held-out test by direct simulation, not on the surface: both parameter sets run
-    // on the fresh seeds (common to both, so that their difference is not the packing).
+    // on seeds of their own (common to both, so that their difference is not the packing;
+    // not the final re-score's, which must not have decided anything).
     // On the surface a held-out point's prediction carries the finite-difference noise of
     // the effect's measured response there, which can outweigh its data's error.
     const HeldOutCheck held = held_out_check(data, def, ev, state.params, fitted);

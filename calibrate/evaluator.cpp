@@ -169,6 +169,7 @@ std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& set
         job.overrides.push_back(fmt::format("run.seed={}", seed));
         job.overrides.push_back(fmt::format("run.replicate={}", r));
         const CompiledScenario sc = compile_job(job);
+        check_model_supports(sc, options_.model);  // e.g. a free friction_base below the 2D slip limit
         job.id.scenario_hash = sc.scenario_hash;
         job.id.run_seed = sc.run_seed;
         job.id.key = job_key(sc.scenario_hash, options_.model);
