@@ -142,3 +142,21 @@ TEST(VerticalSilo3D, TheThreeDModelRefusesABoardSteeperThan60Degrees) {
   EXPECT_NO_THROW(check_model_supports(sc, ModelKind::box2d));
   EXPECT_NO_THROW(check_model_supports(compile_text(falling_sphere(), {"plane.incline_deg=60"}), ModelKind::bullet));
 }
+
+TEST(VerticalSilo, CheckSaysWhichModelRefusesAScenario) {
+  using gapflow::testing::run_gapflow;
+  using gapflow::testing::source_path;
+  const std::string silo = source_path("scenarios/silo/janda2008.toml").string();
+  // Valid for the 2D model: exit 0, with a note that the 3D model refuses it.
+  const auto any = run_gapflow("check " + silo, 30);
+  EXPECT_EQ(any.code, 0) << any.output;
+  EXPECT_NE(any.output.find("the 3d model refuses it"), std::string::npos) << any.output;
+  // Asked for the 3D model: exit 2 at the incline's line.
+  const auto three = run_gapflow("check " + silo + " --model 3d", 30);
+  EXPECT_EQ(three.code, 2) << three.output;
+  EXPECT_NE(three.output.find("janda2008.toml:30:15: key 'plane.incline_deg' = 90"), std::string::npos) << three.output;
+  // Refused by both (rolling spheres on a 70 deg board): exit 2.
+  const auto both = run_gapflow("check " + source_path("scenarios/paper/cylinder.toml").string() +
+                                    " --set plane.incline_deg=70", 30);
+  EXPECT_EQ(both.code, 2) << both.output;
+}
