@@ -27,6 +27,8 @@ struct PlaneDef {
   double width_mm = 300.0;    // mm, between the retaining walls
   double lateral_tilt_deg = 0.0;  // deg, roll of the board about its fall line: gravity gains
                                   // g cos(theta) sin(phi) along +x, the normal part becomes g cos(theta) cos(phi)
+  double cover_gap_mm = 0.0;      // mm, a cover plate parallel to the board this far above it (0 = none): the
+                                  // monolayer cell of a vertical silo (3D; the 2D model is a monolayer already)
 };
 
 // [bottleneck] Two walls from the retaining walls down to the gap.

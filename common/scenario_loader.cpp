@@ -269,6 +269,7 @@ void read_plane(Section s, PlaneDef& p) {
   s.number("length_mm", p.length_mm, lower_open(0, kMaxLengthMm, "mm"));
   s.number("width_mm", p.width_mm, lower_open(0, kMaxLengthMm, "mm"));
   s.number("lateral_tilt_deg", p.lateral_tilt_deg, closed(-10, 10, "deg"));
+  s.number("cover_gap_mm", p.cover_gap_mm, closed(0, kMaxLengthMm, "mm"));
   s.finish();
 }
 
@@ -729,6 +730,7 @@ void write_head(TomlWriter& w, const ScenarioDef& d) {
   w.put("width_mm", d.plane.width_mm);
   // Keys added after results were stored are written only when set, so that older hashes stay valid.
   if (d.plane.lateral_tilt_deg != 0) w.put("lateral_tilt_deg", d.plane.lateral_tilt_deg);
+  if (d.plane.cover_gap_mm != 0) w.put("cover_gap_mm", d.plane.cover_gap_mm);
   w.section("bottleneck");
   w.put("wall_angle_deg", d.bottleneck.wall_angle_deg);
   w.put("gap_mm", d.bottleneck.gap_mm);

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -47,10 +48,22 @@ void check_rolling_holds(const ScenarioDef& d) {
 // 90 deg nothing keeps them there (a quasi-2D cell needs the plate).
 void check_model_supports(const CompiledScenario& scenario, ModelKind kind) {
   if (kind == ModelKind::box2d) check_rolling_holds(scenario.def);
-  if (kind == ModelKind::bullet && scenario.def.plane.incline_deg > 60)
-    throw ScenarioInvalid("plane.incline_deg", fmt::format("{:g}", scenario.def.plane.incline_deg),
-                          "at most 60 deg for the 3D model (it has no cover plate to hold spheres on a steeper board); "
-                          "the 2D model takes up to 90");
+  if (kind != ModelKind::bullet) return;
+  const ScenarioDef& d = scenario.def;
+  if (d.plane.incline_deg > 60 && d.plane.cover_gap_mm == 0)
+    throw ScenarioInvalid("plane.incline_deg", fmt::format("{:g}", d.plane.incline_deg),
+                          "at most 60 deg for the 3D model without a cover plate (plane.cover_gap_mm > 0 holds the "
+                          "spheres in a monolayer on a steeper board); the 2D model takes up to 90");
+  if (d.plane.cover_gap_mm == 0) return;
+  // The plate must clear every sphere and close the cell below the walls' top.
+  double largest_mm = 0;
+  for (const auto& p : scenario.particles) largest_mm = std::max(largest_mm, p.diameter * 1e3);
+  const double walls_mm = d.model.bullet.wall_height_d * d.particles.diameter_mm;
+  if (d.plane.cover_gap_mm <= largest_mm || d.plane.cover_gap_mm > walls_mm)
+    throw ScenarioInvalid("plane.cover_gap_mm", fmt::format("{:g}", d.plane.cover_gap_mm),
+                          fmt::format("must exceed the largest sphere ({:.4g} mm) and not exceed the walls' height "
+                                      "(model.bullet.wall_height_d x d = {:.4g} mm)",
+                                      largest_mm, walls_mm));
 }
 
 std::unique_ptr<EngineSession> make_session(const CompiledScenario& scenario, ModelKind kind) {

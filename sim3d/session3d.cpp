@@ -364,6 +364,18 @@ void add_board(World3D& w) {
   add_static(w, std::move(board), Surface3D::board);
 }
 
+// A cover plate parallel to the board at plane.cover_gap_mm (the glass front of a
+// quasi-2D cell): the half-space z >= h, unbounded like the board and made of the
+// same material (board friction, rolling resistance).
+void add_cover(World3D& w, const CompiledScenario& sc) {
+  if (sc.def.plane.cover_gap_mm <= 0) return;
+  const double h = w.scale.to_engine_length(sc.def.plane.cover_gap_mm * 1e-3);
+  PlacedShape cover;
+  cover.shape = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, -1), static_cast<btScalar>(-h));
+  cover.pose.setIdentity();
+  add_static(w, std::move(cover), Surface3D::board);
+}
+
 void make_kinematic(World3D& w, KinematicBody& k, PlacedShape placed) {
   k.rest = placed.pose;
   k.motion = std::make_unique<KinematicMotion>();
@@ -502,6 +514,7 @@ Session3D::Session3D(const CompiledScenario& scenario) : w_(std::make_unique<Wor
   install_combiner_hooks();
   configure_world(*w_, scenario);
   add_board(*w_);
+  add_cover(*w_, scenario);
   add_walls(*w_, scenario);
   add_obstruction(*w_, scenario);
   add_particles(*w_, scenario);
