@@ -46,8 +46,11 @@ std::string json_list(const std::vector<std::string>& v) {
 
 void write_summary_json(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
   o << "{\n";
-  o << fmt::format("  \"data\": {},\n  \"data_file\": {},\n  \"model\": {},\n  \"observable\": {},\n", json_string(r.data_name),
-                   json_string(data.file.string()), json_string(r.model), json_string(data.observables_text()));
+  // "observable": the points' default kind (a name, as before several observables per file);
+  // "observables": every kind with its scale and point count, for people.
+  o << fmt::format("  \"data\": {},\n  \"data_file\": {},\n  \"model\": {},\n  \"observable\": {},\n  \"observables\": {},\n",
+                   json_string(r.data_name), json_string(data.file.string()), json_string(r.model),
+                   json_string(to_string(data.observable)), json_string(data.observables_text()));
   o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n", json_string(r.verdict), r.poor_fit ? "true" : "false");
   o << "  \"effects\": [";
   for (std::size_t i = 0; i < r.effects.size(); ++i) {
