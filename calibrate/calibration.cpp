@@ -52,7 +52,7 @@ std::vector<std::string> shared_run_correlations(const DataFile& data, const Bas
 
 struct HeldOutCheck {
   int n = 0;                       // held-out points
-  double before = 0, after = 0;    // their chi^2, direct simulation on the fresh seeds
+  double before = 0, after = 0;    // their chi^2, direct simulation on the keep test's own seeds
 };
 
 HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const ParameterSet& before,
@@ -107,7 +107,7 @@ std::vector<double> whitened_residual(const DataFile& data, const Prediction& p)
       w.push_back(kInvalidResidual);
       continue;
     }
-    w.push_back((data_fit_value(data, i) - p.fit[i]) / total_sigma(data, p, i));
+    w.push_back((data.fit_value(i) - p.fit[i]) / total_sigma(data, p, i));
   }
   return w;
 }
@@ -124,7 +124,7 @@ ErrorMeasures measure(const DataFile& data, const Prediction& p, bool held_out, 
       ++m.invalid;
       continue;
     }
-    const double e = data_fit_value(data, i) - p.fit[i];
+    const double e = data.fit_value(i) - p.fit[i];
     sq += e * e;
   }
   m.n = static_cast<int>(picked.size());
@@ -403,7 +403,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
                              (decisive && held.after - held.before <= std::sqrt(2.0 * held.n));
     if (!bic_better || !held_better) {
       round.decision = fmt::format("best candidate {} (adjusted p = {:.3g}) rejected: BIC {:.1f} -> {:.1f}, held-out "
-                                   "chi2 (fresh seeds) {:.1f} -> {:.1f}",
+                                   "chi2 (keep-test seeds) {:.1f} -> {:.1f}",
                                    best->effect, best->p_adjusted, state.bic, after.bic, held.before, held.after);
       loop.say(round.decision);
       out.rounds.push_back(std::move(round));
@@ -412,7 +412,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
     AddedEffect added{e.name, e.key, group, best->neutral, fitted.get(e.key, best->neutral),
                       interval.lo, interval.hi, interval.bounded_lo && interval.bounded_hi};
     round.decision = fmt::format("added {}{} = {:.4g} {} [{:.4g}, {:.4g}] (adjusted p = {:.3g}); BIC {:.1f} -> {:.1f}; "
-                                 "held-out chi2 (fresh seeds) {:.1f} -> {:.1f}",
+                                 "held-out chi2 (keep-test seeds) {:.1f} -> {:.1f}",
                                  e.name, group.size() > 1 ? fmt::format(" (for the group {})", fmt::join(group, ", ")) : "",
                                  added.value, e.unit, added.lo95, added.hi95, best->p_adjusted, state.bic, after.bic, held.before, held.after);
     loop.say(round.decision);

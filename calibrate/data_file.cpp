@@ -52,9 +52,6 @@ const std::vector<std::string> kPointsKeys{"csv"};
 const std::vector<std::string> kMethods{"measured", "digitized", "simulated"};
 const std::vector<std::string> kKinds{"j_paper", "j_mid", "j_flowing", "j_star", "mean_avalanche", "ln_s_plus_1",
                                       "clog_share",   "front_arrival", "exit_offset", "exit_spread"};
-const char* const kKindList =
-    "one of j_paper, j_mid, j_flowing, j_star, mean_avalanche, ln_s_plus_1, clog_share, front_arrival, exit_offset, "
-    "exit_spread";
 const std::vector<std::string> kValueColumns{"value", "uncertainty", "replicates", "held_out", "observable"};
 
 ObservableKind kind_named(const std::string& name) {
@@ -115,7 +112,7 @@ void read_model(StrictTable t, DataFile& d, const std::filesystem::path& base_di
 
 void read_observable(StrictTable t, DataFile& d, std::string& uncertainty_kind) {
   const auto kind = t.choice("kind", kKinds);
-  if (!kind) t.missing("kind", std::string("required: ") + kKindList);
+  if (!kind) t.missing("kind", fmt::format("required: one of {}", fmt::join(kKinds, ", ")));
   d.observable = kind_named(*kind);
   d.scale = default_scale(d.observable);
   if (auto s = t.choice("scale", {"log", "linear"})) d.scale = *s == "log" ? FitScale::log : FitScale::linear;

@@ -14,10 +14,11 @@ const std::vector<EffectDef>& effect_catalogue() {
   // size anywhere in the range is at most ~2 steps from the neutral value.
   static const std::vector<EffectDef> catalogue{
       {"rolling_resistance", "particles.rolling_resistance", "",
-       "resistance from the board, a force mu_r m g cos(theta) against the velocity", 0.0, 0.02, 0.01, true, true,
-       false, true},
+       "resistance from the board, a force mu_r m g cos(theta) against the velocity", 0.0, 0.02, 0.01,
+       {.acts_through_board = true}},
       {"spinning_friction", "particles.spinning_friction_mm", "mm",
-       "torsional friction about the board normal, torque s m g cos(theta)", 0.0, 1.0, 0.5, true, true, false, true},
+       "torsional friction about the board normal, torque s m g cos(theta)", 0.0, 1.0, 0.5,
+       {.acts_through_board = true}},
       {"wall_friction", "particles.friction_wall", "",
        "Coulomb friction against walls and obstruction different from particle-particle friction", 0.05, 0.8,
        0.3},
@@ -25,21 +26,22 @@ const std::vector<EffectDef>& effect_catalogue() {
        0.0, 0.2, 0.1},
       {"restitution", "particles.restitution", "", "pair coefficient of restitution", 0.0, 0.95, -0.4},
       {"lateral_tilt", "plane.lateral_tilt_deg", "deg",
-       "the board rolled about its fall line: gravity g cos(theta) sin(phi) across the channel", 0.0, 6.0, 4.0, true,
-       true, false, true},
+       "the board rolled about its fall line: gravity g cos(theta) sin(phi) across the channel", 0.0, 6.0, 4.0,
+       {.acts_through_board = true}},
       {"gap_offset", "bottleneck.gap_offset_mm", "mm",
        "the wall tips stand further apart than drawn (effective gap W + delta)", -3.0, 3.0, 1.5},
       {"linear_drag", "particles.drag_per_s", "1/s",
        "viscous drag -gamma m v on each particle (air, a film on the board)", 0.0, 6.0, 2.0},
       {"corner_rounding", "obstruction.corner_radius_mm", "mm",
-       "the obstruction's corners rounded to radius r (faces stay in place)", 0.0, 3.0, 2.0, true, true, true},
+       "the obstruction's corners rounded to radius r (faces stay in place)", 0.0, 3.0, 2.0,
+       {.needs_polygon_obstruction = true}},
       // Derived size 1 (README, "The 2D model"); step 0.5 = half the range: on the blind design's
       // set-up (150 spheres, W/d 4.5, 8 deg, 6 replicates) J_mid fell 11 % at 0.5 (92.1 +- 4.9 -> 81.7
       // +- 5.3 /s) and 14 % at 1. 2D only: the 3D model has this friction natively.
       {"rolling_contact", "model.box2d.rolling_contact", "",
        "vertical sliding friction at contacts of rolling spheres (a pushing pair rubs at 2v), as a fraction "
        "of the derived force",
-       0.0, 1.0, 0.5, true, false, false, true, true},
+       0.0, 1.0, 0.5, {.in_3d = false, .acts_through_board = true, .needs_rolling = true}},
   };
   return catalogue;
 }
@@ -51,7 +53,7 @@ const EffectDef* find_effect(const std::string& name) {
 }
 
 bool effect_applies(const EffectDef& effect, ModelKind model, const DataFile& data) {
-  if (model == ModelKind::box2d ? !effect.in_2d : !effect.in_3d) return false;
+  if (model == ModelKind::box2d ? !effect.scope.in_2d : !effect.scope.in_3d) return false;
   for (const FreeParameter& f : data.free)
     if (f.key == effect.key) return false;
   bool polygon = false, board = false, rolling = false;
@@ -62,9 +64,9 @@ bool effect_applies(const EffectDef& effect, ModelKind model, const DataFile& da
     board = board || def.plane.incline_deg < 90;
     rolling = rolling || def.model.box2d.rolling.enabled;
   }
-  if (effect.needs_polygon_obstruction && !polygon) return false;
-  if (effect.acts_through_board && !board) return false;
-  if (effect.needs_rolling && model == ModelKind::box2d && !rolling) return false;
+  if (effect.scope.needs_polygon_obstruction && !polygon) return false;
+  if (effect.scope.acts_through_board && !board) return false;
+  if (effect.scope.needs_rolling && model == ModelKind::box2d && !rolling) return false;
   return true;
 }
 

@@ -15,6 +15,15 @@
 
 namespace gapflow {
 
+// Where an effect can act (written with designated initializers in the catalogue).
+struct EffectScope {
+  bool in_2d = true;                       // the 2D model has it
+  bool in_3d = true;                       // the 3D model has it
+  bool needs_polygon_obstruction = false;  // only visible when some design point has a triangle/polygon obstruction
+  bool acts_through_board = false;         // its force is m g cos(theta) x something: nothing in a vertical silo
+  bool needs_rolling = false;              // the 2D model's rolling spheres carry it (refused with rolling off)
+};
+
 struct EffectDef {
   std::string name;       // short identifier used in reports ("rolling_resistance")
   std::string key;        // scenario key that switches it on ("particles.rolling_resistance")
@@ -22,11 +31,7 @@ struct EffectDef {
   std::string physics;    // one line: what it is
   double lo = 0, hi = 0;  // plausible range of the key's value (lab units)
   double step = 0;        // physical step for the signature (key units; sign = direction)
-  bool in_2d = true;      // the 2D model has it
-  bool in_3d = true;      // the 3D model has it
-  bool needs_polygon_obstruction = false;  // only visible when some design point has a triangle/polygon obstruction
-  bool acts_through_board = false;  // its force is m g cos(theta) x something: nothing in a vertical silo
-  bool needs_rolling = false;       // the 2D model's rolling spheres carry it (refused with rolling off)
+  EffectScope scope;      // where it can act
 };
 
 // The catalogue, in a fixed order.

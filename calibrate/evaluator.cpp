@@ -49,13 +49,27 @@ double ParameterSet::get(const std::string& key, double fallback) const {
 
 namespace {
 
-std::optional<double> rate_of(ObservableKind kind, const RunRecord& r) {
+// One run's value of a per-run observable: a rate (particles/s), the front's arrival
+// (s), or the mean or spread of where its particles crossed the gap line (mm from the
+// gap's centre; plane frame, +x across). Missing when the run does not define it.
+std::optional<double> per_run_value(ObservableKind kind, const RunRecord& r) {
   switch (kind) {
     case ObservableKind::j_paper: return r.j_paper;
     case ObservableKind::j_mid: return r.j_mid;
     case ObservableKind::j_flowing: return r.j_flowing;
     case ObservableKind::j_star: return r.j_paper_star();
-    default: return std::nullopt;
+    case ObservableKind::front_arrival:
+      if (r.crossings.empty()) return std::nullopt;
+      return r.crossings.front().t;  // sorted by time (GapMonitor::finish)
+    case ObservableKind::exit_offset:
+    case ObservableKind::exit_spread: {
+      std::vector<double> x_mm;
+      for (const Crossing& c : r.crossings) x_mm.push_back(c.x * 1e3);
+      const Summary s = summarize(x_mm);
+      if (s.n < (kind == ObservableKind::exit_offset ? 1u : 2u)) return std::nullopt;
+      return kind == ObservableKind::exit_offset ? s.mean : s.sd;
+    }
+    default: return std::nullopt;  // pooled over runs (avalanches, clog share): observe()
   }
 }
 
@@ -104,19 +118,6 @@ PointObservable avalanche_observable(ObservableKind kind, FitScale scale, const 
 
 }  // namespace
 
-// Per run: the front's arrival (s), or the mean or spread of where the runs'
-// particles crossed the gap line (mm from its centre; plane frame, +x across).
-std::optional<double> crossing_statistic(ObservableKind kind, const RunRecord& r) {
-  if (r.crossings.empty()) return std::nullopt;
-  if (kind == ObservableKind::front_arrival) return r.crossings.front().t;  // sorted by time (GapMonitor::finish)
-  std::vector<double> x_mm;
-  for (const Crossing& c : r.crossings) x_mm.push_back(c.x * 1e3);
-  const Summary s = summarize(x_mm);
-  if (kind == ObservableKind::exit_offset) return s.mean;
-  if (s.n < 2) return std::nullopt;
-  return s.sd;
-}
-
 PointObservable observe(ObservableKind kind, FitScale scale, const std::vector<RunRecord>& runs) {
   switch (kind) {
     case ObservableKind::mean_avalanche:
@@ -130,11 +131,8 @@ PointObservable observe(ObservableKind kind, FitScale scale, const std::vector<R
       return o;
     }
     default: {
-      const bool from_crossings = kind == ObservableKind::front_arrival || kind == ObservableKind::exit_offset ||
-                                  kind == ObservableKind::exit_spread;
       std::vector<double> rates;
-      for (const RunRecord& r : runs)
-        rates.push_back((from_crossings ? crossing_statistic(kind, r) : rate_of(kind, r)).value_or(kNaN));
+      for (const RunRecord& r : runs) rates.push_back(per_run_value(kind, r).value_or(kNaN));
       std::vector<double> defined;
       for (double v : rates)
         if (v == v) defined.push_back(v);

@@ -9,8 +9,6 @@
 
 namespace gapflow {
 
-double data_fit_value(const DataFile& data, std::size_t i) { return data.fit_value(i); }
-
 double total_sigma(const DataFile& data, const Prediction& p, std::size_t i) {
   return std::hypot(data.fit_se(i), p.se_fit[i]);
 }
@@ -19,7 +17,7 @@ double chi2_of(const DataFile& data, const Prediction& p, bool held_out) {
   double chi2 = 0;
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     if (data.points[i].held_out != held_out) continue;
-    const double w = p.valid[i] ? (data_fit_value(data, i) - p.fit[i]) / total_sigma(data, p, i) : 10.0;
+    const double w = p.valid[i] ? (data.fit_value(i) - p.fit[i]) / total_sigma(data, p, i) : 10.0;
     chi2 += w * w;
   }
   return chi2;

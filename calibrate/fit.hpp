@@ -26,9 +26,8 @@ namespace gapflow {
 
 using Say = std::function<void(const std::string&)>;
 
-// The data value of point i on the fit scale, and the total standard error of the
-// residual there (data and model added in quadrature).
-double data_fit_value(const DataFile& data, std::size_t i);
+// The total standard error of point i's residual on the fit scale (data and model
+// added in quadrature; the data's value there: DataFile::fit_value).
 double total_sigma(const DataFile& data, const Prediction& p, std::size_t i);
 // chi^2 over the fitted (or held-out) points; an invalid model point counts as 10 sigma.
 double chi2_of(const DataFile& data, const Prediction& p, bool held_out = false);

@@ -19,6 +19,7 @@ inline constexpr double kStandardGravity = 9.81;  // m/s^2, the g of the dimensi
 inline constexpr double kPi = 3.14159265358979323846;
 
 inline double deg_to_rad(double deg) { return deg * kPi / 180.0; }
+inline double rad_to_deg(double rad) { return rad * 180.0 / kPi; }
 inline double mm_to_m(double mm) { return mm * 1e-3; }
 
 // Lab <-> engine Froude scaling.

@@ -32,7 +32,7 @@ void check_rolling_holds(const ScenarioDef& d) {
   const Box2DRollingDef& r = d.model.box2d.rolling;
   if (!r.enabled) return;
   const double k = r.inertia_factor, mu = d.particles.friction_base;
-  const double limit_deg = std::atan(mu * (1 + k) / k) * 180.0 / kPi;
+  const double limit_deg = rad_to_deg(std::atan(mu * (1 + k) / k));
   if (d.plane.incline_deg <= limit_deg) return;
   throw ScenarioInvalid("plane.incline_deg", fmt::format("{:g}", d.plane.incline_deg),
                         fmt::format("at most {:.1f} deg while model.box2d.rolling.enabled = true: spheres roll without "
@@ -43,9 +43,9 @@ void check_rolling_holds(const ScenarioDef& d) {
 
 }  // namespace
 
-// What a model cannot run, said before it runs. The 3D board has no cover plate
-// yet: on a board steeper than 60 deg spheres are barely pressed onto it, and at
-// 90 deg nothing keeps them there (a quasi-2D cell needs the plate).
+// What a model cannot run, said before it runs. On a 3D board steeper than 60 deg
+// spheres are barely pressed onto it, and at 90 deg nothing keeps them there: a
+// quasi-2D cell needs its cover plate (plane.cover_gap_mm).
 void check_model_supports(const CompiledScenario& scenario, ModelKind kind) {
   if (kind == ModelKind::box2d) check_rolling_holds(scenario.def);
   if (kind != ModelKind::bullet) return;

@@ -48,15 +48,6 @@ double t_quantile(double p, double df) { return std::isinf(df) ? normal_quantile
 
 }  // namespace
 
-RatioEstimate ratio_interval(const std::vector<double>& cell, const std::vector<double>& base, double confidence) {
-  RatioEstimate r = ratio_core(cell, base);
-  if (!r.valid) return r;
-  const double t = r.se > 0 ? t_quantile(0.5 + confidence / 2, r.df) : 0.0;
-  r.lo = r.ratio - t * r.se;
-  r.hi = r.ratio + t * r.se;
-  return r;
-}
-
 RatioEstimate ratio_bounds(const std::vector<double>& cell, const std::vector<double>& base, double a) {
   RatioEstimate r = ratio_core(cell, base);
   if (!r.valid) return r;
@@ -64,6 +55,10 @@ RatioEstimate ratio_bounds(const std::vector<double>& cell, const std::vector<do
   r.lo = r.ratio - t * r.se;
   r.hi = r.ratio + t * r.se;
   return r;
+}
+
+RatioEstimate ratio_interval(const std::vector<double>& cell, const std::vector<double>& base, double confidence) {
+  return ratio_bounds(cell, base, (1 - confidence) / 2);
 }
 
 std::vector<double> replicate_slice(const std::vector<double>& j, int from, int to) {

@@ -15,6 +15,8 @@
 // ("cell": a cell whose true J/J_0 is >= drop_below is dropped with probability <= alpha),
 // or alpha / (cells x rounds) ("family": the probability that ANY such cell is dropped is
 // <= alpha), by Bonferroni, up to the normal approximation of the ratio (both tested).
+// The guarantee covers the drop_below rule only: best_margin (drop a cell below the best
+// cell's lower bound minus a margin) saves runs but bounds no error rate.
 #pragma once
 
 #include <optional>

@@ -191,7 +191,7 @@ TextTable rounds_table(const RacingParams& p, const RaceState& s, std::size_t n_
 
 // One heat map per shape and gap; the PNG file names.
 std::vector<std::string> draw_maps(const ScreenGrid& grid, const std::vector<CellResult>& cells,
-                                   const fs::path& out_dir) {
+                                   const RacingParams& p, const fs::path& out_dir) {
   std::vector<std::string> files;
   std::vector<std::string> shapes;
   for (const ScreenCell& c : grid.cells)
@@ -210,8 +210,9 @@ std::vector<std::string> draw_maps(const ScreenGrid& grid, const std::vector<Cel
       m.ylabel = shape == "cylinder" ? "diameter/d" : "side/d";
       for (double x : xs) m.xs.push_back(fmt::format("{:.3g}", x));
       for (double y : ys) m.ys.push_back(fmt::format("{:.3g}", y));
-      m.legend = "* interval above 1 (95 %), ** also Bonferroni over survivors, - below 1; <u rN: dropped after "
-                 "round N (upper bound u), n/f: does not fit, ?: not decided yet";
+      m.legend = fmt::format("* interval above 1 ({:.0f} %), ** also Bonferroni over survivors, - below 1; <u rN: "
+                             "dropped after round N (upper bound u), n/f: does not fit, ?: not decided yet",
+                             100 * p.confidence);
       for (const CellResult& c : cells) {
         if (c.cell->series != shape || c.cell->gap != gap.gap) continue;
         HeatCell h;
@@ -260,7 +261,10 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
                              100 * (1 - p.alpha), p.drop_below)
                : fmt::format("a cell whose true J/J_0 is >= {} is dropped with probability <= {:.0f} % (per cell, "
                              "not for the whole map: scope = \"family\" for that)",
-                             p.drop_below, 100 * p.alpha),
+                             p.drop_below, 100 * p.alpha) +
+                   (p.best_margin ? "; this bound covers the drop_below rule only: the best_margin rule has no "
+                                    "error guarantee"
+                                  : ""),
       state.screening_done(p) ? "" : fmt::format("**Incomplete**: {} of {} rounds decided.", state.rounds_decided,
                                                  race_rounds(p))));
   s.paragraphs.push_back(fmt::format(
@@ -277,7 +281,7 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
   s.tables.push_back(cells_table(cells, p));
   if (plots) {
     std::string list;
-    for (const std::string& f : draw_maps(grid, cells, out_dir)) list += fmt::format("![{}]({})\n", f, f);
+    for (const std::string& f : draw_maps(grid, cells, study.screen->racing, out_dir)) list += fmt::format("![{}]({})\n", f, f);
     s.paragraphs.push_back("Heat maps (left J/J_0, right clogs per 100 particles passed):\n\n" + list);
   }
   return s;

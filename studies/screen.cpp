@@ -1,5 +1,7 @@
 #include "studies/screen.hpp"
 
+#include "studies/confirm.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -68,8 +70,7 @@ ScreenGrid screen_grid(const StudyDef& study) {
 }
 
 double screen_j(const RunRecord& r, const std::string& j_kind) {
-  const std::optional<double>& j = j_kind == "flowing" ? r.j_flowing : j_kind == "mid" ? r.j_mid : r.j_paper;
-  if (j) return *j;
+  if (auto j = run_j(r, j_kind)) return *j;
   return r.sim_time_s > 0 ? r.particles / r.sim_time_s : std::nan("");
 }
 

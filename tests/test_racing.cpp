@@ -6,6 +6,7 @@
 //   * a tiny end-to-end screen (2 diameters x 3 distances x 1 gap, 2D) runs, decides, resumes
 //     and writes its report; bad [screen] keys exit 2 with file:line:column.
 #include "studies/racing.hpp"
+#include "common/statistics.hpp"
 
 #include "common/simulation.hpp"
 #include "studies/screen.hpp"
@@ -210,6 +211,10 @@ TEST(Racing, RatioIntervalOfKnownSamples) {
   EXPECT_NEAR(r.se, std::sqrt(25 + 30.25) / 100 * std::sqrt(4.0 / 3.0), 1e-9);  // sample sd = 11.547
   EXPECT_GT(r.df, 5);
   EXPECT_LT(r.df, 6.5);
+  EXPECT_NEAR(r.df, 5.946, 1e-3);  // Welch-Satterthwaite (the sample sds scale both variances alike)
+  const double t = student_t_quantile(0.975, r.df);
+  EXPECT_NEAR(r.lo, r.ratio - t * r.se, 1e-12);
+  EXPECT_NEAR(r.hi, r.ratio + t * r.se, 1e-12);
   EXPECT_LT(r.lo, 1.1);
   EXPECT_GT(r.hi, 1.1);
   EXPECT_FALSE(ratio_interval({1}, {1, 2}, 0.95).valid);
