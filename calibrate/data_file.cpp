@@ -350,16 +350,19 @@ void check_points_run_in(const DataFile& data, ModelKind model) {
 }
 
 std::vector<std::string> DataFile::point_overrides(std::size_t i) const {
+  // Columns in lab units first: one of them may be the particle size itself, and a
+  // column in diameters (W/d) means the point's own d, not the template's.
   std::vector<std::string> out = set;
-  double d_mm = 0;
+  bool any_in_diameters = false;
   for (std::size_t c = 0; c < design.size(); ++c) {
-    std::string value = points[i].design[c];
-    if (design[c].in_diameters) {
-      if (d_mm == 0) d_mm = load_scenario(scenario, set).def.particles.diameter_mm;
-      value = number_text(std::stod(value) * d_mm);
-    }
-    out.push_back(design[c].key + "=" + value);
+    if (design[c].in_diameters) any_in_diameters = true;
+    else out.push_back(design[c].key + "=" + points[i].design[c]);
   }
+  if (!any_in_diameters) return out;
+  const double d_mm = load_scenario(scenario, out).def.particles.diameter_mm;
+  for (std::size_t c = 0; c < design.size(); ++c)
+    if (design[c].in_diameters)
+      out.push_back(design[c].key + "=" + number_text(std::stod(points[i].design[c]) * d_mm));
   return out;
 }
 

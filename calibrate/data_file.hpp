@@ -61,7 +61,7 @@ struct DataSource {
 struct DesignColumn {
   std::string column;         // name in the points table ("W_over_d")
   std::string key;            // scenario key ("bottleneck.gap_mm")
-  bool in_diameters = false;  // unit "d": value x nominal diameter (mm); "lab": the key's own unit
+  bool in_diameters = false;  // unit "d": value x the point's nominal diameter (mm, after its lab-unit columns); "lab": the key's own unit
   SourceLocation where;
 };
 

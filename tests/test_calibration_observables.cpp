@@ -48,6 +48,18 @@ TEST(DataFileObservables, PointsMayMeasureOtherObservablesOnTheSameRuns) {
   EXPECT_NE(d.observables_text().find("exit_offset (linear) at 1 points"), std::string::npos) << d.observables_text();
 }
 
+TEST(DataFileDesign, WidthsInDiametersUseEachPointsOwnSize) {
+  // The size column comes after W/d in the file: W/d must still mean the point's own d.
+  const DataFile d = parse(
+      "[[design]]\ncolumn = \"size\"\nkey = \"particles.diameter_mm\"\n"
+      "[[point]]\nW_over_d = 4\nsize = \"large\"\nvalue = 80\nuncertainty = 2\n"
+      "[[point]]\nW_over_d = 4\nsize = \"small\"\nvalue = 80\nuncertainty = 2\n"
+      "[[point]]\nW_over_d = 5\nsize = 10.0\nvalue = 80\nuncertainty = 2\n");
+  EXPECT_NEAR(d.point_scenario(0).def.bottleneck.gap_mm, 4 * 11.9, 1e-9);
+  EXPECT_NEAR(d.point_scenario(1).def.bottleneck.gap_mm, 4 * 6.15, 1e-9);
+  EXPECT_NEAR(d.point_scenario(2).def.bottleneck.gap_mm, 5 * 10.0, 1e-9);
+}
+
 TEST(DataFileObservables, BadObservablesAreRejectedWithKeyAndLine) {
   const std::string p = "[[point]]\nW_over_d = 4\nvalue = 80\nuncertainty = 2\n";
   auto expect_error = [](const std::string& tail, const std::string& key, int line) {
