@@ -106,8 +106,13 @@ double chi2_between(const DataFile& design, const TwinDef& def, const Prediction
 PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const TwinTruth& truth, const Prediction& with,
                              Evaluator& ev) {
   PlantedSignal sig;
-  const bool any_effect = std::any_of(truth.planted.begin(), truth.planted.end(),
-                                      [](const PlantedValue& v) { return v.name != "free"; });
+  // A --set of a free parameter's key only gives its true value: it plants no effect.
+  const auto is_free_key = [&](const std::string& key) {
+    return std::any_of(design.free.begin(), design.free.end(), [&](const FreeParameter& f) { return f.key == key; });
+  };
+  const bool any_effect = std::any_of(truth.planted.begin(), truth.planted.end(), [&](const PlantedValue& v) {
+    return v.name != "free" && !(v.name == "set" && is_free_key(v.key));
+  });
   if (!any_effect) return sig;
   const ParameterSet without = without_planted_effects(design, truth);
   std::vector<ParameterSet> sets;
@@ -148,8 +153,12 @@ TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
   TwinTruth t;
   RandomStream rng(mix_seed(def.seed, 0x7477696eull));  // "twin"
   t.model_seed = design.seed + 1000003 + def.seed;      // never the seeds a calibration of it uses
+  const auto set_by_hand = [&](const std::string& key) {
+    return std::any_of(def.set.begin(), def.set.end(), [&](const std::string& s) { return s.rfind(key + "=", 0) == 0; });
+  };
   if (def.draw_free)
     for (const FreeParameter& f : design.free) {
+      if (set_by_hand(f.key)) continue;  // --set gives its true value (e.g. the material both models share)
       const double span = f.hi - f.lo;
       t.planted.push_back({"free", f.key, rng.uniform(f.lo + 0.2 * span, f.hi - 0.2 * span), kNaN});
     }
