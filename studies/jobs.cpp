@@ -124,6 +124,8 @@ namespace {
 Job make_job(const StudyDef& study, const SeriesDef& s, const std::string& scenario_text, const Point& p,
              const PointSpec& spec, ModelKind model, int replicate) {
   std::vector<LocatedOverride> overrides = spec.overrides;
+  if (auto plan = study.per_model.find(model); plan != study.per_model.end())
+    overrides.insert(overrides.end(), plan->second.set.begin(), plan->second.set.end());
   const SourceLocation seed_at{study.file.string(), 0, 0};
   overrides.push_back({fmt::format("run.seed={}", study.seed), seed_at});
   overrides.push_back({fmt::format("run.replicate={}", replicate), seed_at});

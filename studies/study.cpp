@@ -31,7 +31,7 @@ const std::vector<std::string> kStudyKeys{"name",       "description", "replicat
 const std::vector<std::string> kSeriesKeys{"label", "scenario", "set", "sweep"};
 const std::vector<std::string> kSweepKeys{"key", "values", "from", "to", "step"};
 const std::vector<std::string> kQuickKeys{"replicates", "models", "thin"};
-const std::vector<std::string> kPlanKeys{"replicates", "thin"};
+const std::vector<std::string> kPlanKeys{"replicates", "thin", "set"};
 const std::vector<std::string> kModelNames{"2d", "3d"};
 const std::vector<std::string> kConfirmKeys{"model", "top", "replicates", "rank_by", "set"};
 const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max", "pairing"};
@@ -187,6 +187,7 @@ ModelPlan read_plan(StrictTable t) {
   ModelPlan m;
   if (auto r = t.integer("replicates", 1, kMaxReplicates)) m.replicates = static_cast<int>(*r);
   if (auto k = t.integer("thin", 1, kMaxAxisValues)) m.thin = static_cast<int>(*k);
+  m.set = read_set(t);
   return m;
 }
 

@@ -7,9 +7,11 @@
 //               replicates_target_halfwidth, replicates_max, replicates_batch (sequential replication)
 //   [[series]]  label, scenario (relative to the study file), set
 //     [[series.sweep]]  key + values, or key + from/to/step (inclusive)
-//   [per_model.2d] / [per_model.3d]  replicates, thin  (a model's own budget: the 3D
+//   [per_model.2d] / [per_model.3d]  replicates, thin, set  (a model's own budget: the 3D
 //               model costs ~3x the 2D one per run, so it may run fewer replicates on a
-//               coarser grid; its points keep their indices in the full grid)
+//               coarser grid; its points keep their indices in the full grid; set: overrides
+//               for that model's runs only, e.g. a 2D reduced-model effect that leaves the
+//               3D runs, and their keys in a store, as they were)
 //   [quick]     replicates, models, thin  (what --quick changes)
 //   [confirm]   model, top, replicates, rank_by, set  (screen -> confirm)
 //   [report]    kind (string or list), baseline, j, pairing
@@ -62,6 +64,7 @@ struct SeriesDef {
 struct ModelPlan {
   std::optional<int> replicates;  // per point (default: [study] replicates)
   int thin = 1;                   // run every thin-th value of each axis (always the first and the last)
+  std::vector<LocatedOverride> set;  // this model's runs only, after the study's and series' (e.g. a 2D-only effect)
 };
 
 // [quick]: a cheaper version of the study for a first look.

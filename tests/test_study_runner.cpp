@@ -428,6 +428,25 @@ TEST(StudyJobs, PerModelPlanThinsAndCutsReplicatesOfThatModelOnly) {
   EXPECT_EQ(e.where().line, 7);
 }
 
+// [per_model.2d] set: a 2D-only reduced-model effect changes the 2D jobs only, so the 3D
+// runs keep their keys (and a store made without it still holds them).
+TEST(StudyJobs, PerModelSetChangesThatModelsJobsOnly) {
+  const std::string sweep = "[[series.sweep]]\nkey = \"bottleneck.gap_mm\"\nvalues = [30, 35]\n";
+  const std::string head = "replicates = 1\nmodels = [\"2d\", \"3d\"]\nset = [\"particles.count=20\"]";
+  const std::vector<Job> plain = expand_jobs(parse(study_text(head, sweep)));
+  const std::vector<Job> with = expand_jobs(parse(study_text(
+      head, sweep + "[per_model.2d]\nset = [\"model.box2d.rolling.enabled=true\", \"model.box2d.rolling_contact=1\"]\n")));
+  ASSERT_EQ(plain.size(), with.size());
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    ASSERT_EQ(plain[i].id.model, with[i].id.model);
+    if (plain[i].id.model == "3d") EXPECT_EQ(plain[i].id.key, with[i].id.key) << i;
+    else EXPECT_NE(plain[i].id.key, with[i].id.key) << i;
+  }
+  const ScenarioError e = study_error(study_text(head, sweep + "[per_model.2d]\nset = [\"model.box2d.rolling_contact=7\"]\n"));
+  EXPECT_EQ(e.key(), "model.box2d.rolling_contact") << e.what();
+  EXPECT_EQ(e.where().line, 13) << e.what();
+}
+
 // Screen ranking: a point must have J in every screening run to outrank one that has;
 // the confirming jobs carry [confirm] set after the study's overrides.
 TEST(StudyConfirm, RanksCompletePointsFirstAndAppliesConfirmSet) {
