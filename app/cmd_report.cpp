@@ -18,6 +18,7 @@ struct ReportCommand::Options {
   bool no_plots = false;
   bool no_snapshots = false;
   bool pairing = false;
+  std::string compare;
 };
 
 namespace {
@@ -30,6 +31,13 @@ int cmd_report(const ReportCommand::Options& o) {
   if (!o.out.empty()) r.out = o.out;
   r.plots = !o.no_plots;
   r.snapshots = !o.no_snapshots;
+  if (!o.compare.empty()) {
+    const std::size_t eq = o.compare.find('=');
+    const std::string model = o.compare.substr(0, eq);
+    if (eq == std::string::npos || (model != "2d" && model != "3d") || eq + 1 == o.compare.size())
+      throw std::invalid_argument("--compare '" + o.compare + "': expected MODEL=STORE with MODEL 2d or 3d, e.g. 3d=results/flow-vs-distance");
+    r.compare = ReportRequest::Compare{model, o.compare.substr(eq + 1)};
+  }
   if (o.pairing) {  // a measurement printed, no file written
     const ReportData data = load_report_data(r, std::cerr);
     if (data.study.report.baseline.empty()) throw std::invalid_argument("--pairing: the study has no [report] baseline");
@@ -56,6 +64,9 @@ ReportCommand::ReportCommand(CLI::App& app) : o_(std::make_unique<Options>()) {
   o.cmd->add_flag("--pairing", o.pairing,
                   "Print J/J_0 per point paired by replicate against unpaired (correlation, interval widths) "
                   "and exit; writes nothing (studies/paired.hpp)");
+  o.cmd->add_option("--compare", o.compare,
+                    "MODEL=STORE: that model's runs from another study's store join the report (same series and "
+                    "points), e.g. --compare 3d=results/flow-vs-distance for a 2D-only re-run");
   o.cmd->add_flag("--no-snapshots", o.no_snapshots,
                   "Do not re-simulate one stored run per point class for the report's top-view snapshots");
 }

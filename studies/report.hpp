@@ -331,6 +331,14 @@ struct ReportRequest {
   std::optional<std::filesystem::path> out;    // default: the store's folder
   bool plots = true;
   bool snapshots = true;  // one re-simulated top view per point class (studies/report_snapshots.hpp)
+  // --compare MODEL=STORE: that model's runs from another store (of one study, with the same
+  // series and point grid) join the report as if run here, e.g. the 3D runs a 2D-only re-run is
+  // compared with; the store given first must hold none of that model.
+  struct Compare {
+    std::string model;             // "2d" | "3d"
+    std::filesystem::path results;  // runs.sqlite or its folder
+  };
+  std::optional<Compare> compare;
 };
 // The command that regenerates the report (paths as given).
 std::string regenerate_command(const ReportRequest& r);
@@ -353,6 +361,7 @@ struct MarkdownInput {
   std::string plot_warning;
   std::string snapshots;  // the "Snapshots" section (snapshots_markdown), "" = none
   std::string command;
+  std::string compare_note;  // where --compare's runs came from ("" = none)
 };
 std::string render_report_markdown(const MarkdownInput& in);
 

@@ -92,6 +92,7 @@ std::string render_report_markdown(const MarkdownInput& in) {
   std::string out = fmt::format("# Study report: {}\n\n", d.study.name);
   if (!d.study.description.empty()) out += d.study.description + "\n\n";
   out += what_was_run(d);
+  if (!in.compare_note.empty()) out += in.compare_note + "\n\n";
   out += "## Results by series and model\n\n";
   out +=
       "The report's flow rate three ways, side by side: mean with its percentile "
@@ -130,6 +131,7 @@ std::string regenerate_command(const ReportRequest& r) {
   if (r.out) c += " --out " + shell_quote(r.out->string());
   if (!r.plots) c += " --no-plots";
   if (!r.snapshots) c += " --no-snapshots";
+  if (r.compare) c += " --compare " + shell_quote(r.compare->model + "=" + r.compare->results.string());
   return c;
 }
 
@@ -158,6 +160,29 @@ std::vector<StoredRun> load_runs(const fs::path& db, const StudyInfo& info) {
   } else if (studies.size() > 1) {
     throw std::invalid_argument(fmt::format("{} holds several studies ({}): give --study", db.string(), names));
   }
+  return runs;
+}
+
+// --compare: the other store's runs of one model, relabelled as this study's. Refused when
+// this store has runs of that model too (two sources for one point) or when the other store's
+// runs of it belong to several studies (which one is meant?).
+std::vector<StoredRun> compared_runs(const ReportRequest::Compare& c, const StudyInfo& info,
+                                     const std::vector<StoredRun>& own, std::string& note) {
+  if (std::any_of(own.begin(), own.end(), [&](const StoredRun& r) { return r.id.model == c.model; }))
+    throw std::invalid_argument(fmt::format("--compare {}=...: the study's own store already has {} runs", c.model, c.model));
+  const fs::path db = store_file(c.results);
+  std::vector<StoredRun> runs = Store(db, StoreAccess::read).load();
+  std::erase_if(runs, [&](const StoredRun& r) { return r.id.model != c.model; });
+  std::set<std::string> studies;
+  for (const StoredRun& r : runs) studies.insert(r.id.study);
+  if (studies.size() != 1)
+    throw std::invalid_argument(fmt::format("--compare {}={}: {} {} runs of {} studies; one study is needed", c.model,
+                                            c.results.string(), db.string(), runs.empty() ? "holds no" : "holds",
+                                            studies.size()));
+  note = fmt::format("The {} runs ({}) are study '{}''s, read from {} (`--compare`): the same series and point "
+                     "grid, run by that study; this study ran none of them.",
+                     c.model, runs.size(), *studies.begin(), db.string());
+  for (StoredRun& r : runs) r.id.study = info.name;
   return runs;
 }
 
@@ -254,8 +279,14 @@ ReportData load_report_data(const ReportRequest& request, std::ostream& log) {
 ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::ostream& log) {
   const fs::path db = store_file(request.results);
   const StudyInfo info = request.study ? read_study_info(*request.study) : recorded_study_info(db, log);
-  const std::vector<StoredRun> runs = load_runs(db, info);
-  const ReportData data = collect_report_data(runs, info);
+  const std::vector<StoredRun> runs = load_runs(db, info);  // this store's: snapshots re-run these only
+  std::string compare_note;
+  std::vector<StoredRun> all = runs;
+  if (request.compare) {
+    const std::vector<StoredRun> other = compared_runs(*request.compare, info, runs, compare_note);
+    all.insert(all.end(), other.begin(), other.end());
+  }
+  const ReportData data = collect_report_data(all, info);
   const ReportOptions& opt = data.study.report;
   if (!opt.baseline.empty() && std::none_of(data.points.begin(), data.points.end(),
                                             [&](const ReportPoint& p) { return p.series == opt.baseline; }))
@@ -274,6 +305,7 @@ ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::
   md.data = &data;
   md.tables = point_tables(data, opt.j);
   md.command = regenerate_command(request);
+  md.compare_note = compare_note;
   out << fmt::format("study '{}': {} runs, {} points\n\n", data.study.name, data.n_runs, data.points.size());
   for (const TextTable& t : md.tables) out << render_text(t) << "\n";
   md.experiments = experiment_sections(data, opt);

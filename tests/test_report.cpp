@@ -652,6 +652,46 @@ TEST(ReportModels, IdenticalRecordsGiveRatioOneAndPerfectAgreement) {
   EXPECT_EQ(s.figures[0].lines[0].x, s.figures[0].lines[0].y);
 }
 
+// --compare 3d=STORE: a 2D-only study's report takes the 3D runs of another study's store,
+// point by point; refused when the own store has 3D runs or the other none.
+TEST(ReportModels, CompareBringsTheOtherModelsRunsFromAnotherStore) {
+  TempDir dir;
+  {
+    SyntheticStore own(dir / "own.sqlite"), other(dir / "other.sqlite");
+    for (int p = 0; p < 3; ++p) {
+      own.add_point("cyl", "2d", p, 10.0 * (p + 1), around(8.0 + 3 * p));
+      other.add_point("cyl", "2d", p, 10.0 * (p + 1), around(99.0));  // not taken: the wrong model
+      other.add_point("cyl", "3d", p, 10.0 * (p + 1), around(4.0 + 3 * p));
+    }
+  }
+  ReportRequest r;
+  r.results = dir / "own.sqlite";
+  r.out = dir / "report";
+  r.plots = false, r.snapshots = false;
+  r.compare = ReportRequest::Compare{"3d", dir / "other.sqlite"};
+  std::ostringstream out, log;
+  make_report(r, out, log);
+  const Csv csv = read_csv(dir / "report" / "points.csv");
+  int rows_3d = 0;
+  for (std::size_t i = 0; i < csv.rows.size(); ++i)
+    if (csv.at(i, "model") == "3d") {
+      ++rows_3d;
+      EXPECT_NEAR(std::stod(csv.at(i, "J_paper_mean")), 4.0 + 3 * std::stoi(csv.at(i, "point")), 1e-9);
+    } else {
+      EXPECT_NEAR(std::stod(csv.at(i, "J_paper_mean")), 8.0 + 3 * std::stoi(csv.at(i, "point")), 1e-9);
+    }
+  EXPECT_EQ(rows_3d, 3);
+  const std::string md = read_text(dir / "report" / "report.md");
+  EXPECT_NE(md.find("The 3d runs (18) are study 'synthetic'"), std::string::npos) << md.substr(0, 600);
+  EXPECT_NE(md.find("--compare 3d="), std::string::npos);
+
+  r.results = dir / "other.sqlite";  // it has 3D runs of its own
+  EXPECT_THROW(make_report(r, out, log), std::invalid_argument);
+  r.results = dir / "own.sqlite";
+  r.compare = ReportRequest::Compare{"2d", dir / "other.sqlite"};  // own 2D runs: two sources
+  EXPECT_THROW(make_report(r, out, log), std::invalid_argument);
+}
+
 // ------------------------------------------------------------------ clogging
 
 // Runs whose avalanches after the first all have size s = 2^k - 1 at W/d = sqrt(k): then
