@@ -167,7 +167,9 @@ TEST(Sequential, LoaderRejectsBadValuesWithTheirPlace) {
   for (const Case& c : cases) {
     const ScenarioError e = error_of(seq_study(c.keys));
     EXPECT_EQ(e.key(), c.key) << c.keys << "\n" << e.what();
-    if (c.line > 1) EXPECT_EQ(e.where().line, c.line) << c.keys << "\n" << e.what();
+    if (c.line > 1) {
+      EXPECT_EQ(e.where().line, c.line) << c.keys << "\n" << e.what();
+    }
     EXPECT_EQ(e.where().source, "seq.toml");
   }
 }
