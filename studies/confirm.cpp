@@ -64,8 +64,15 @@ std::vector<Job> confirm_jobs(const StudyDef& study, const std::vector<RankedPoi
   StudyDef confirming = study;
   confirming.models = {study.confirm.model};
   confirming.replicates = study.confirm.replicates;
-  confirming.per_model.clear();
-  for (SeriesDef& s : confirming.series) s.set.insert(s.set.end(), study.confirm.set.begin(), study.confirm.set.end());
+  // The confirming model runs as the study defines it ([per_model] set kept, e.g. a 2D
+  // confirmation of a 2D screen keeps its effects), on every point, with [confirm] set last.
+  for (auto& [model, plan] : confirming.per_model) {
+    plan.replicates.reset();
+    plan.thin = 1;
+    plan.set.insert(plan.set.end(), study.confirm.set.begin(), study.confirm.set.end());
+  }
+  if (!confirming.per_model.count(study.confirm.model))
+    for (SeriesDef& s : confirming.series) s.set.insert(s.set.end(), study.confirm.set.begin(), study.confirm.set.end());
   std::vector<Job> out;
   for (Job& j : expand_jobs(confirming))
     if (chosen.count({j.id.series, j.id.point})) out.push_back(std::move(j));

@@ -372,7 +372,10 @@ StudyDef apply_quick(StudyDef study) {
   if (study.quick.replicates) study.replicates = *study.quick.replicates;
   if (study.quick.models) study.models = *study.quick.models;
   if (study.quick.replicates) study.confirm.replicates = std::min(study.confirm.replicates, *study.quick.replicates);
-  study.per_model.clear();  // --quick: one budget for every model
+  for (auto& [model, plan] : study.per_model) {  // --quick: one budget for every model, the same models
+    plan.replicates.reset();
+    plan.thin = 1;
+  }
   study.sequential = {};     // --quick: a fixed count, a first look (README "Sequential replication")
   for (SeriesDef& s : study.series)
     for (SweepAxis& a : s.axes) a.values = thin_values(a.values, study.quick.thin);

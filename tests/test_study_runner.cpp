@@ -442,6 +442,13 @@ TEST(StudyJobs, PerModelSetChangesThatModelsJobsOnly) {
     if (plain[i].id.model == "3d") EXPECT_EQ(plain[i].id.key, with[i].id.key) << i;
     else EXPECT_NE(plain[i].id.key, with[i].id.key) << i;
   }
+  // --quick keeps the effect (only replicates and thinning are the quick budget's).
+  const std::vector<Job> quick = expand_jobs(apply_quick(parse(study_text(
+      head, sweep + "[per_model.2d]\nset = [\"model.box2d.rolling_contact=1\"]\n[quick]\nreplicates = 1\n"))));
+  for (const Job& j : quick) {
+    if (j.id.model != "2d") continue;
+    EXPECT_EQ(std::count(j.overrides.begin(), j.overrides.end(), "model.box2d.rolling_contact=1"), 1) << j.id.key;
+  }
   const ScenarioError e = study_error(study_text(head, sweep + "[per_model.2d]\nset = [\"model.box2d.rolling_contact=7\"]\n"));
   EXPECT_EQ(e.key(), "model.box2d.rolling_contact") << e.what();
   EXPECT_EQ(e.where().line, 13) << e.what();
@@ -491,6 +498,18 @@ TEST(StudyConfirm, RanksCompletePointsFirstAndAppliesConfirmSet) {
   EXPECT_LT(at("run.time_limit_s=25"), at("run.time_limit_s=60")) << "the confirm override comes last and wins";
   EXPECT_LT(at("run.time_limit_s=60"), static_cast<std::ptrdiff_t>(o.size()));
   EXPECT_DOUBLE_EQ(compile_job(jobs[0]).def.run.time_limit_s, 60.0);
+  // A confirming model with its own [per_model] set keeps it, and [confirm] set still comes last.
+  const StudyDef own = parse(study_text("replicates = 2\nset = [\"particles.count=20\", \"run.time_limit_s=25\"]",
+                                        "[[series.sweep]]\nkey = \"bottleneck.gap_mm\"\nvalues = [30, 35, 40]\n"
+                                        "[per_model.3d]\nreplicates = 1\nset = [\"run.time_limit_s=30\"]\n"
+                                        "[confirm]\ntop = 1\nreplicates = 2\nset = [\"run.time_limit_s=60\"]\n"));
+  const std::vector<Job> own_jobs = confirm_jobs(own, ranked);
+  ASSERT_EQ(own_jobs.size(), 2u) << "[confirm] replicates, not the model's";
+  const auto& p = own_jobs[0].overrides;
+  const auto pos = [&](const std::string& text) { return std::find(p.begin(), p.end(), text) - p.begin(); };
+  EXPECT_LT(pos("run.time_limit_s=30"), pos("run.time_limit_s=60"));
+  EXPECT_LT(pos("run.time_limit_s=60"), static_cast<std::ptrdiff_t>(p.size()));
+  EXPECT_DOUBLE_EQ(compile_job(own_jobs[0]).def.run.time_limit_s, 60.0);
 }
 
 TEST(StudyJobs, ThinKeepsFirstAndLast) {
