@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 namespace gapflow {
@@ -106,13 +107,8 @@ double chi2_between(const DataFile& design, const TwinDef& def, const Prediction
 PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const TwinTruth& truth, const Prediction& with,
                              Evaluator& ev) {
   PlantedSignal sig;
-  // A --set of a free parameter's key only gives its true value: it plants no effect.
-  const auto is_free_key = [&](const std::string& key) {
-    return std::any_of(design.free.begin(), design.free.end(), [&](const FreeParameter& f) { return f.key == key; });
-  };
-  const bool any_effect = std::any_of(truth.planted.begin(), truth.planted.end(), [&](const PlantedValue& v) {
-    return v.name != "free" && !(v.name == "set" && is_free_key(v.key));
-  });
+  const bool any_effect = std::any_of(truth.planted.begin(), truth.planted.end(),
+                                      [](const PlantedValue& v) { return v.name != "free"; });
   if (!any_effect) return sig;
   const ParameterSet without = without_planted_effects(design, truth);
   std::vector<ParameterSet> sets;
@@ -153,14 +149,18 @@ TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
   TwinTruth t;
   RandomStream rng(mix_seed(def.seed, 0x7477696eull));  // "twin"
   t.model_seed = design.seed + 1000003 + def.seed;      // never the seeds a calibration of it uses
-  const auto set_by_hand = [&](const std::string& key) {
-    return std::any_of(def.set.begin(), def.set.end(), [&](const std::string& s) { return s.rfind(key + "=", 0) == 0; });
+  // A --set of a free parameter's key is its true value (e.g. the material both models share):
+  // still drawn, so that every other draw is the same with and without it, then replaced.
+  const auto set_value = [&](const std::string& key) -> std::optional<double> {
+    for (const std::string& s : def.set)
+      if (s.rfind(key + "=", 0) == 0) return std::stod(s.substr(key.size() + 1));
+    return std::nullopt;
   };
   if (def.draw_free)
     for (const FreeParameter& f : design.free) {
-      if (set_by_hand(f.key)) continue;  // --set gives its true value (e.g. the material both models share)
       const double span = f.hi - f.lo;
-      t.planted.push_back({"free", f.key, rng.uniform(f.lo + 0.2 * span, f.hi - 0.2 * span), kNaN});
+      const double drawn = rng.uniform(f.lo + 0.2 * span, f.hi - 0.2 * span);
+      t.planted.push_back({"free", f.key, set_value(f.key).value_or(drawn), kNaN});
     }
   for (const std::string& spec : def.effects) {
     const std::size_t cut = spec.find_first_of(":=");
@@ -184,7 +184,10 @@ TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
   for (const std::string& s : def.set) {
     const std::size_t eq = s.find('=');
     if (eq == std::string::npos) throw std::invalid_argument("twin: --set takes key=value, not '" + s + "'");
-    t.planted.push_back({"set", s.substr(0, eq), std::stod(s.substr(eq + 1)), kNaN});
+    const std::string key = s.substr(0, eq);
+    if (std::any_of(t.planted.begin(), t.planted.end(), [&](const PlantedValue& v) { return v.name == "free" && v.key == key; }))
+      continue;  // a free parameter's true value, recorded above
+    t.planted.push_back({"set", key, std::stod(s.substr(eq + 1)), kNaN});
   }
   return t;
 }

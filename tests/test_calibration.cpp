@@ -182,6 +182,10 @@ TEST(DataFile, MalformedFilesAreRejectedWithKeyAndLine) {
   expect_error(p1 + p1 + "[[free]]\nkey = \"run.seed\"\nlo = 0\nhi = 1\n", "free.key", 0);
   // A design value the scenario refuses is located at its point.
   expect_error(p1 + "[[point]]\nW_over_d = 400\nvalue = 80\nuncertainty = 2\n", "bottleneck.gap_mm", head_lines + 5);
+  // A length in diameters must be a number; the size itself cannot be given in sizes.
+  expect_error(p1 + "[[point]]\nW_over_d = \"wide\"\nvalue = 80\nuncertainty = 2\n", "point.W_over_d", head_lines + 6);
+  expect_error(p1 + "[[design]]\ncolumn = \"size\"\nkey = \"particles.diameter_mm\"\nunit = \"d\"\n", "design.unit",
+               head_lines + 8);
 }
 
 TEST(DataFile, CsvPointsAreCheckedLikeInlineOnes) {
@@ -198,7 +202,7 @@ TEST(DataFile, CsvPointsAreCheckedLikeInlineOnes) {
 }
 
 TEST(DataFile, ShippedFilesLoadWithProvenance) {
-  for (const char* f : {"data/examples/gap_sweep_design.toml", "data/blind/design.toml"}) {
+  for (const char* f : {"data/examples/gap_sweep_design.toml", "data/blind/design.toml", "data/case_a/design.toml"}) {
     const DataFile d = load_data_file(source_path(f));
     EXPECT_FALSE(d.source.citation.empty()) << f;
     EXPECT_FALSE(d.source.method.empty()) << f;
@@ -223,6 +227,26 @@ TEST(DataFile, ShippedFilesLoadWithProvenance) {
     EXPECT_EQ(e.key(), "plane.incline_deg") << e.what();
     EXPECT_EQ(e.where().line, janda.points.front().where.line) << e.what();
   }
+}
+
+// A twin's --set of a free parameter's key is that parameter's true value; the other
+// draws (here the hidden drag's size) are the same as without it.
+TEST(Twin, SetOfAFreeKeyIsItsTrueValueAndLeavesTheOtherDraws) {
+  const DataFile design = load_data_file(source_path("data/examples/gap_sweep_design.toml"));
+  ASSERT_EQ(design.free.size(), 1u);
+  TwinDef def;
+  def.seed = 5;
+  def.effects = {"linear_drag"};
+  const TwinTruth drawn = draw_twin(design, def);
+  def.set = {design.free[0].key + "=0.24"};
+  const TwinTruth fixed = draw_twin(design, def);
+  ASSERT_EQ(drawn.planted.size(), 2u);
+  ASSERT_EQ(fixed.planted.size(), 2u) << "no separate 'set' entry for a free key";
+  EXPECT_EQ(fixed.planted[0].name, "free");
+  EXPECT_DOUBLE_EQ(fixed.planted[0].value, 0.24);
+  EXPECT_NE(drawn.planted[0].value, 0.24);
+  EXPECT_EQ(fixed.planted[1].name, "linear_drag");
+  EXPECT_DOUBLE_EQ(fixed.planted[1].value, drawn.planted[1].value);
 }
 
 TEST(EffectCatalogue, BoardEffectsDoNotApplyInAVerticalSilo) {
