@@ -131,6 +131,8 @@ DesignColumn read_design(StrictTable t) {
   c.key = required_text(t, "key", "the scenario key the column sets, e.g. \"bottleneck.gap_mm\"");
   if (reserved_key(c.key)) t.fail("key", *t.get("key"), "run.seed and run.replicate are the calibration's");
   c.in_diameters = t.choice("unit", {"d", "lab"}).value_or("lab") == "d";
+  if (c.in_diameters && c.key == "particles.diameter_mm")
+    t.fail("unit", *t.get("unit"), "must be \"lab\" for particles.diameter_mm (the size cannot be counted in sizes)");
   return c;
 }
 
@@ -174,6 +176,8 @@ DataPoint read_point(StrictTable t, const DataFile& d, const std::string& uncert
   for (const DesignColumn& c : d.design) {
     const toml::node* n = t.get(c.column);
     if (!n) t.missing(c.column, fmt::format("required: the design column '{}' (sets {})", c.column, c.key));
+    if (c.in_diameters && !n->is_number())
+      t.fail(c.column, *n, fmt::format("must be a number (a length in particle diameters, unit \"d\")"));
     p.design.push_back(design_literal(*n, t, c.column));
   }
   p.observable = d.observable;
