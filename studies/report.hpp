@@ -339,6 +339,7 @@ struct ReportRequest {
     std::filesystem::path results;  // runs.sqlite or its folder
   };
   std::optional<Compare> compare;
+  std::optional<JKind> j;  // --j: the flow rate the analyses use, instead of the study's [report] j
 };
 // The command that regenerates the report (paths as given).
 std::string regenerate_command(const ReportRequest& r);

@@ -132,6 +132,7 @@ std::string regenerate_command(const ReportRequest& r) {
   if (!r.plots) c += " --no-plots";
   if (!r.snapshots) c += " --no-snapshots";
   if (r.compare) c += " --compare " + shell_quote(r.compare->model + "=" + r.compare->results.string());
+  if (r.j) c += *r.j == JKind::paper ? " --j paper" : *r.j == JKind::flowing ? " --j flowing" : " --j mid";
   return c;
 }
 
@@ -166,8 +167,8 @@ std::vector<StoredRun> load_runs(const fs::path& db, const StudyInfo& info) {
 // --compare: the other store's runs of one model, relabelled as this study's. Refused when
 // this store has runs of that model too (two sources for one point) or when the other store's
 // runs of it belong to several studies (which one is meant?).
-std::vector<StoredRun> compared_runs(const ReportRequest::Compare& c, const StudyInfo& info,
-                                     const std::vector<StoredRun>& own, std::string& note) {
+std::vector<StoredRun> compared_runs(const ReportRequest::Compare& c, const std::vector<StoredRun>& own,
+                                     std::string& note) {
   if (std::any_of(own.begin(), own.end(), [&](const StoredRun& r) { return r.id.model == c.model; }))
     throw std::invalid_argument(fmt::format("--compare {}=...: the study's own store already has {} runs", c.model, c.model));
   const fs::path db = store_file(c.results);
@@ -176,13 +177,14 @@ std::vector<StoredRun> compared_runs(const ReportRequest::Compare& c, const Stud
   std::set<std::string> studies;
   for (const StoredRun& r : runs) studies.insert(r.id.study);
   if (studies.size() != 1)
-    throw std::invalid_argument(fmt::format("--compare {}={}: {} {} runs of {} studies; one study is needed", c.model,
-                                            c.results.string(), db.string(), runs.empty() ? "holds no" : "holds",
-                                            studies.size()));
-  note = fmt::format("The {} runs ({}) are study '{}''s, read from {} (`--compare`): the same series and point "
-                     "grid, run by that study; this study ran none of them.",
+    throw std::invalid_argument(fmt::format("--compare {}={}: {} holds {} runs of {} studies ({}); exactly one is needed",
+                                            c.model, c.results.string(), db.string(), c.model, studies.size(),
+                                            fmt::join(studies, ", ")));
+  note = fmt::format("The {} runs ({}) are those of study \"{}\", read from {} (`--compare`): the same series and "
+                     "point grid, run by that study with its own settings; this study ran none of them.",
                      c.model, runs.size(), *studies.begin(), db.string());
-  for (StoredRun& r : runs) r.id.study = info.name;
+  const std::string name = own.front().id.study;  // load_runs left one study
+  for (StoredRun& r : runs) r.id.study = name;
   return runs;
 }
 
@@ -278,12 +280,13 @@ ReportData load_report_data(const ReportRequest& request, std::ostream& log) {
 
 ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::ostream& log) {
   const fs::path db = store_file(request.results);
-  const StudyInfo info = request.study ? read_study_info(*request.study) : recorded_study_info(db, log);
+  StudyInfo info = request.study ? read_study_info(*request.study) : recorded_study_info(db, log);
+  if (request.j) info.report.j = *request.j;
   const std::vector<StoredRun> runs = load_runs(db, info);  // this store's: snapshots re-run these only
   std::string compare_note;
   std::vector<StoredRun> all = runs;
   if (request.compare) {
-    const std::vector<StoredRun> other = compared_runs(*request.compare, info, runs, compare_note);
+    const std::vector<StoredRun> other = compared_runs(*request.compare, runs, compare_note);
     all.insert(all.end(), other.begin(), other.end());
   }
   const ReportData data = collect_report_data(all, info);

@@ -110,14 +110,16 @@ RunRecord synthetic_run(const std::string& model, double j, double distance_mm, 
 
 class SyntheticStore {
  public:
-  explicit SyntheticStore(const fs::path& db) : store_(db) {}
+  // Keys count from first_key: a second SyntheticStore on the same file needs its own range.
+  explicit SyntheticStore(const fs::path& db, std::string study = "synthetic", int first_key = 0)
+      : store_(db), study_(std::move(study)), counter_(first_key) {}
   // `values` replicates of one point; axes_json built from the distance when given.
   void add_point(const std::string& series, const std::string& model, int point, std::optional<double> distance_mm,
                  const std::vector<double>& values, bool clogged = false) {
     for (std::size_t i = 0; i < values.size(); ++i) {
       JobIdentity id;
       id.key = fmt::format("{:016x}", ++counter_);
-      id.study = "synthetic";
+      id.study = study_;
       id.series = series;
       id.point = point;
       id.model = model;
@@ -131,6 +133,7 @@ class SyntheticStore {
 
  private:
   Store store_;
+  std::string study_;
   int counter_ = 0;
 };
 
@@ -657,7 +660,7 @@ TEST(ReportModels, IdenticalRecordsGiveRatioOneAndPerfectAgreement) {
 TEST(ReportModels, CompareBringsTheOtherModelsRunsFromAnotherStore) {
   TempDir dir;
   {
-    SyntheticStore own(dir / "own.sqlite"), other(dir / "other.sqlite");
+    SyntheticStore own(dir / "own.sqlite"), other(dir / "other.sqlite", "other-study");
     for (int p = 0; p < 3; ++p) {
       own.add_point("cyl", "2d", p, 10.0 * (p + 1), around(8.0 + 3 * p));
       other.add_point("cyl", "2d", p, 10.0 * (p + 1), around(99.0));  // not taken: the wrong model
@@ -669,6 +672,7 @@ TEST(ReportModels, CompareBringsTheOtherModelsRunsFromAnotherStore) {
   r.out = dir / "report";
   r.plots = false, r.snapshots = false;
   r.compare = ReportRequest::Compare{"3d", dir / "other.sqlite"};
+  r.j = JKind::mid;  // --j: the analyses' flow rate instead of the study's
   std::ostringstream out, log;
   make_report(r, out, log);
   const Csv csv = read_csv(dir / "report" / "points.csv");
@@ -682,14 +686,38 @@ TEST(ReportModels, CompareBringsTheOtherModelsRunsFromAnotherStore) {
     }
   EXPECT_EQ(rows_3d, 3);
   const std::string md = read_text(dir / "report" / "report.md");
-  EXPECT_NE(md.find("The 3d runs (18) are study 'synthetic'"), std::string::npos) << md.substr(0, 600);
+  EXPECT_NE(md.find("The 3d runs (18) are those of study \"other-study\""), std::string::npos) << md.substr(0, 600);
   EXPECT_NE(md.find("--compare 3d="), std::string::npos);
+  EXPECT_NE(md.find(" --j mid"), std::string::npos);
+  EXPECT_NE(md.find("# Study report: synthetic"), std::string::npos) << "relabelled as the own study's";
 
-  r.results = dir / "other.sqlite";  // it has 3D runs of its own
-  EXPECT_THROW(make_report(r, out, log), std::invalid_argument);
-  r.results = dir / "own.sqlite";
-  r.compare = ReportRequest::Compare{"2d", dir / "other.sqlite"};  // own 2D runs: two sources
-  EXPECT_THROW(make_report(r, out, log), std::invalid_argument);
+  const auto error_of = [&](ReportRequest q) -> std::string {
+    try {
+      make_report(q, out, log);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  ReportRequest q = r;
+  q.results = dir / "other.sqlite";  // it has 3D runs of its own
+  EXPECT_NE(error_of(q).find("already has 3d runs"), std::string::npos) << error_of(q);
+  q = r;
+  q.compare = ReportRequest::Compare{"2d", dir / "other.sqlite"};  // own 2D runs: two sources
+  EXPECT_NE(error_of(q).find("already has 2d runs"), std::string::npos) << error_of(q);
+  {
+    SyntheticStore third(dir / "other.sqlite", "third-study", 1000);  // a second study's 3D runs beside other's
+    third.add_point("cyl", "3d", 0, 10.0, around(5.0));
+  }
+  const std::string several = error_of(r);
+  EXPECT_NE(several.find("of 2 studies (other-study, third-study)"), std::string::npos) << several;
+  {
+    SyntheticStore none(dir / "none.sqlite", "none-study");
+    none.add_point("cyl", "2d", 0, 10.0, around(5.0));
+  }
+  q = r;
+  q.compare = ReportRequest::Compare{"3d", dir / "none.sqlite"};
+  EXPECT_NE(error_of(q).find("holds 3d runs of 0 studies"), std::string::npos) << error_of(q);
 }
 
 // ------------------------------------------------------------------ clogging
