@@ -360,7 +360,8 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
 
   // 2.-4. Rounds of attribution.
   std::vector<EffectTerm> terms;
-  std::vector<Candidate> cands = loop.signatures(base, terms);
+  // --max-effects 0 is a fit and its errors only: no candidate is measured.
+  std::vector<Candidate> cands = def.max_effects > 0 ? loop.signatures(base, terms) : std::vector<Candidate>{};
   ModelState state = out.before;
   for (int round_no = 0; round_no < def.max_effects; ++round_no) {
     Round round = loop.score_round(cands, state, surface);
@@ -437,7 +438,9 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.after.simulated_fresh = fresh[1];
 
   out.poor_fit = out.after.fitted.chi.p < 0.01;
-  if (out.effects.empty())
+  if (def.max_effects == 0)
+    out.verdict = out.before.fitted.chi.p >= def.alpha ? "consistent with noise" : "residual not attributed (--max-effects 0)";
+  else if (out.effects.empty())
     out.verdict = out.before.fitted.chi.p >= def.alpha ? "consistent with noise" : "unexplained residual";
   else
     out.verdict = out.poor_fit ? "effect found, poor fit remains" : "effect found";
