@@ -122,7 +122,9 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                      d ? d->unit : "", e.interval_bounded ? "profile" : "linearised", e.lo95, e.hi95, e.neutral,
                      e.group.size() > 1 ? fmt::format(", standing for the group {{{}}} that this design cannot tell apart", fmt::join(e.group, ", ")) : "");
   }
-  if (r.poor_fit) o << " The fit is still poor after the additions (chi2 p < 0.01): read any attribution with care.";
+  if (r.poor_fit)
+    o << (r.effects.empty() ? " The fit is poor (chi2 p < 0.01 on the fitted points)."
+                            : " The fit is still poor after the additions (chi2 p < 0.01): read any attribution with care.");
   o << "\n\n## Error before and after\n\nRMSE on the fit scale (log scale: about a relative error); RMS of the whitened residual (1 = at the noise floor); chi2/nu with its p-value (fitted points: nu = n - fitted parameters; held-out points: nu = n).\n\n";
   o << "| points | n | RMSE | RMS/noise | chi2 / nu | p |\n|---|---|---|---|---|---|\n";
   o << errors_row("before, fitted", r.before.fitted) << errors_row("before, held out", r.before.held_out);
@@ -167,8 +169,12 @@ void write_calibration_outputs(const DataFile& data, const CalibrationResult& re
   const char* env = std::getenv("GAPFLOW_CALIBRATION_PLOT_SCRIPT");
   const std::string script = env && *env ? env : GAPFLOW_CALIBRATION_PLOT_SCRIPT;
   const std::optional<std::string> python = find_python_with_matplotlib();
-  if (!python || run_program({*python, script, dir.string()}, dir / "plots.log") != 0)
-    std::cerr << "calibrate: plots were not drawn (" << (python ? "see " + (dir / "plots.log").string() : "no python3 with matplotlib") << ")\n";
+  const std::filesystem::path log = dir / "plots.log";
+  if (!python || run_program({*python, script, dir.string()}, log) != 0) {
+    std::cerr << "calibrate: plots were not drawn (" << (python ? "see " + log.string() : "no python3 with matplotlib") << ")\n";
+    return;
+  }
+  std::filesystem::remove(log);  // kept only when it explains a failure (as the study report does)
 }
 
 }  // namespace gapflow
