@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -143,6 +144,17 @@ PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const T
   return sig;
 }
 
+// A number given on the command line (--set key=VALUE, --effect NAME=VALUE): all of it must be
+// a finite number, else the user is told which option and what was given.
+double option_number(const std::string& text, const std::string& option) {
+  double v = 0;
+  const char* end = text.data() + text.size();
+  const auto [stop, ec] = std::from_chars(text.data(), end, v);
+  if (text.empty() || ec != std::errc() || stop != end || !std::isfinite(v))
+    throw std::invalid_argument(fmt::format("twin: {}: '{}' is not a number", option, text));
+  return v;
+}
+
 }  // namespace
 
 TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
@@ -153,7 +165,7 @@ TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
   // still drawn, so that every other draw is the same with and without it, then replaced.
   const auto set_value = [&](const std::string& key) -> std::optional<double> {
     for (const std::string& s : def.set)
-      if (s.rfind(key + "=", 0) == 0) return std::stod(s.substr(key.size() + 1));
+      if (s.rfind(key + "=", 0) == 0) return option_number(s.substr(key.size() + 1), "--set " + key);
     return std::nullopt;
   };
   if (def.draw_free)
@@ -170,7 +182,7 @@ TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
     const double neutral = neutral_value(*e, design);
     double value = 0;
     if (cut != std::string::npos && spec[cut] == '=') {
-      value = std::stod(spec.substr(cut + 1));
+      value = option_number(spec.substr(cut + 1), "--effect " + name);
       if (value < e->lo || value > e->hi)
         throw std::invalid_argument(fmt::format("twin: {} = {} is outside its plausible range [{}, {}]", name, value, e->lo, e->hi));
     } else {
@@ -187,7 +199,7 @@ TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
     const std::string key = s.substr(0, eq);
     if (std::any_of(t.planted.begin(), t.planted.end(), [&](const PlantedValue& v) { return v.name == "free" && v.key == key; }))
       continue;  // a free parameter's true value, recorded above
-    t.planted.push_back({"set", key, std::stod(s.substr(eq + 1)), kNaN});
+    t.planted.push_back({"set", key, option_number(s.substr(eq + 1), "--set " + key), kNaN});
   }
   return t;
 }

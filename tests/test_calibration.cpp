@@ -249,6 +249,27 @@ TEST(Twin, SetOfAFreeKeyIsItsTrueValueAndLeavesTheOtherDraws) {
   EXPECT_DOUBLE_EQ(fixed.planted[1].value, drawn.planted[1].value);
 }
 
+// A value on the twin's command line that is not a number names the option and the text.
+TEST(Twin, ANonNumericValueNamesItsOption) {
+  const DataFile design = load_data_file(source_path("data/examples/gap_sweep_design.toml"));
+  const auto message_of = [&](const TwinDef& def) -> std::string {
+    try {
+      (void)draw_twin(design, def);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  TwinDef def;
+  def.set = {"particles.quadratic_drag_per_m=2x"};
+  EXPECT_EQ(message_of(def), "twin: --set particles.quadratic_drag_per_m: '2x' is not a number");
+  def.set = {design.free[0].key + "="};
+  EXPECT_EQ(message_of(def), "twin: --set " + design.free[0].key + ": '' is not a number");
+  def.set = {};
+  def.effects = {"linear_drag=nan"};
+  EXPECT_EQ(message_of(def), "twin: --effect linear_drag: 'nan' is not a number");
+}
+
 TEST(EffectCatalogue, BoardEffectsDoNotApplyInAVerticalSilo) {
   // Nothing presses a bead on the plates of a vertical cell: the board's resistance, spin
   // friction and tilt act through m g cos(90 deg) = 0, and the rolling contact needs rolling.
