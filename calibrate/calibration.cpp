@@ -156,6 +156,13 @@ Eigen::VectorXd fitted_whitened(const DataFile& data, const Prediction& at, cons
   return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
 }
 
+// The step to the end of the effect's range on its step's side, if that is at least
+// 1.5 steps (else 0: there is no larger step to take).
+double far_step(const Candidate& c, const EffectDef& e) {
+  const double end = (c.step > 0 ? e.hi : e.lo) - c.neutral;
+  return std::abs(end) >= 1.5 * std::abs(c.step) ? end : 0.0;
+}
+
 // A step that stays inside [lo, hi] from `at` (reversed if needed).
 double step_inside(double at, double step, double lo, double hi) {
   if (at + step <= hi + 1e-12 && at + step >= lo - 1e-12) return step;
@@ -180,7 +187,6 @@ class Loop {
   // by its physical step under common random numbers, all in one batch of runs.
   std::vector<Candidate> signatures(const BaselineFit& base, std::vector<EffectTerm>& terms) {
     std::vector<Candidate> cands;
-    std::vector<ParameterSet> sets;
     for (const EffectDef& e : effect_catalogue()) {
       if (!effect_applies(e, def_.model, data_)) continue;
       Candidate c;
@@ -188,20 +194,46 @@ class Loop {
       c.key = e.key;
       c.neutral = neutral_value(e, data_);
       c.step = step_inside(c.neutral, e.step, e.lo, e.hi);
-      for (const ParameterSet& n : base.nodes) sets.push_back(n.with(e.key, c.neutral + c.step));
       cands.push_back(c);
     }
-    say(fmt::format("signatures: {} effects moved by their physical steps at {} node(s) ({} runs)", cands.size(),
-                    base.nodes.size(), sets.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
-    const std::vector<Prediction> moved = ev_.evaluate(sets);
-    terms.clear();
+    std::vector<std::size_t> all(cands.size());
+    for (std::size_t c = 0; c < cands.size(); ++c) all[c] = c;
+    terms.assign(cands.size(), EffectTerm{});
+    measure_signatures(cands, all, base, terms, "moved by their physical steps");
+    // A signature lost in the noise points the score test nowhere (the data's residual is
+    // projected on a direction that is mostly noise): measure it again at its range's end.
+    std::vector<std::size_t> weak;
     for (std::size_t c = 0; c < cands.size(); ++c) {
-      const EffectDef& e = *find_effect(cands[c].effect);
+      const double far = far_step(cands[c], *find_effect(cands[c].effect));
+      if (cands[c].signature_chi2 < def_.weak_signature_chi2_per_point * cands[c].signature_dof && far != 0) {
+        cands[c].first_step = cands[c].step;
+        cands[c].first_visibility_p = cands[c].visibility_p;
+        cands[c].step = far;
+        weak.push_back(c);
+      }
+    }
+    if (!weak.empty()) measure_signatures(cands, weak, base, terms, "weak at their steps, measured at their ranges' ends");
+    return cands;
+  }
+
+  // Move the candidates `which` by their steps at every baseline node (same seeds) and
+  // set their signatures, visibility and terms from the paired differences.
+  void measure_signatures(std::vector<Candidate>& cands, const std::vector<std::size_t>& which, const BaselineFit& base,
+                          std::vector<EffectTerm>& terms, const std::string& why) {
+    std::vector<ParameterSet> sets;
+    for (std::size_t c : which)
+      for (const ParameterSet& n : base.nodes) sets.push_back(n.with(cands[c].key, cands[c].neutral + cands[c].step));
+    say(fmt::format("signatures: {} effect(s) {} at {} node(s) ({} runs)", which.size(), why, base.nodes.size(),
+                    sets.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
+    const std::vector<Prediction> moved = ev_.evaluate(sets);
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      Candidate& cand = cands[which[k]];
+      const EffectDef& e = *find_effect(cand.effect);
       std::vector<double> slope, slope_se;
       double chi2 = 0;
       int dof = 0;
       for (std::size_t i = 0; i < data_.points.size(); ++i) {
-        const std::vector<double> d = paired_differences(moved, c * base.nodes.size(), base, i, cands[c].step);
+        const std::vector<double> d = paired_differences(moved, k * base.nodes.size(), base, i, cand.step);
         const Summary s = summarize(d);
         slope.push_back(d.size() >= 2 ? s.mean : 0.0);
         slope_se.push_back(d.size() >= 2 ? s.se() : 0.0);
@@ -210,13 +242,26 @@ class Loop {
         if (s.se() > 0) chi2 += (s.mean / s.se()) * (s.mean / s.se());
         else if (s.mean != 0) chi2 += 1e6;  // a deterministic shift
       }
-      EffectTerm t = EffectTerm::single_step(e.name, e.key, cands[c].neutral, e.lo, e.hi, cands[c].step, slope, slope_se);
-      cands[c].signature = t.slope;
-      cands[c].visibility_p = dof > 0 ? 1 - chi_square_cdf(chi2, dof) : 1.0;
-      cands[c].visible = cands[c].visibility_p < def_.visible_p;
-      terms.push_back(std::move(t));
+      EffectTerm t = EffectTerm::single_step(e.name, e.key, cand.neutral, e.lo, e.hi, cand.step, slope, slope_se);
+      if (cand.first_step != 0) keep_first_step(t, terms[which[k]], cand.first_step);
+      cand.signature = t.slope;
+      cand.signature_chi2 = chi2;
+      cand.signature_dof = dof;
+      cand.visibility_p = dof > 0 ? 1 - chi_square_cdf(chi2, dof) : 1.0;
+      cand.visible = cand.visibility_p < def_.visible_p;
+      terms[which[k]] = std::move(t);
     }
-    return cands;
+  }
+
+  // The physical step's shifts stay in the term measured at the range's end: they are
+  // runs already made, and the size fit uses every measured size.
+  static void keep_first_step(EffectTerm& term, const EffectTerm& first, double first_step) {
+    std::vector<double> shift, se;
+    for (std::size_t i = 0; i < first.slope.size(); ++i) {
+      shift.push_back(first.slope[i] * first_step);
+      se.push_back(first.slope_se[i] * std::abs(first_step));
+    }
+    term.add_size(first_step, shift, se);
   }
 
   // Measure an effect the loop is about to add at more sizes across its range

@@ -36,6 +36,8 @@ struct CalibrationDef {
   double alpha = 0.05;             // significance of the score tests (family-wise, Bonferroni) and of chi^2
   double group_cosine = 0.9;       // |cos| above which two signatures are one group
   double visible_p = 0.01;         // a signature must move the model beyond its noise at this level
+  double weak_signature_chi2_per_point = 4;  // below this paired chi^2 per fitted point (2 se a point), a
+                                   // signature is measured again at its range's end (dimensionless)
   int max_effects = 2;             // rounds of "add an effect"
   int grid_max = 9;                // grid nodes of a one-parameter baseline fit
   int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)
@@ -71,8 +73,12 @@ struct Candidate {
   std::string key;
   double neutral = 0;          // the template's value
   double step = 0;             // the step used (key units)
+  double first_step = 0;       // the physical step, when it was too weak and `step` is the range's end (else 0)
+  double first_visibility_p = 1;  // visibility at first_step
   bool visible = false;        // the step moved the model beyond its noise (p < visible_p)
   double visibility_p = 1;
+  double signature_chi2 = 0;   // paired chi^2 of the step's shift over the fitted points
+  int signature_dof = 0;       // fitted points behind it
   std::vector<double> signature;  // d(fit)/d(key) per point
   Score score;                 // against the residual of the round
   double p_adjusted = 1;       // Bonferroni over the visible candidates

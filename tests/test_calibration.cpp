@@ -341,6 +341,22 @@ TEST(CalibrationEndToEnd, RecoversAPlantedDragAndLeavesANullTwinAlone) {
   EXPECT_TRUE(planted.truth.signal.known);
   EXPECT_GT(planted.truth.signal.chi2, planted.truth.signal.critical);
   EXPECT_GT(planted.truth.signal.oracle_power, 0.5);
+  // A signature too weak at its physical step (paired chi^2 < 4 per fitted point) was taken
+  // again to its range's end; every other one was strong enough or had no larger step.
+  ASSERT_FALSE(planted.result.rounds.empty());
+  int remeasured = 0;
+  for (const Candidate& c : planted.result.rounds.front().candidates) {
+    const EffectDef& e = *find_effect(c.effect);
+    const double end = (c.step > 0 ? e.hi : e.lo) - c.neutral;
+    if (c.first_step != 0) {
+      ++remeasured;
+      EXPECT_DOUBLE_EQ(c.step, end) << c.effect;
+      EXPECT_GE(std::abs(c.step), 1.5 * std::abs(c.first_step)) << c.effect;
+    } else if (std::abs(end) >= 1.5 * std::abs(c.step)) {
+      EXPECT_GE(c.signature_chi2, 4.0 * c.signature_dof) << c.effect << " weak, not re-measured";
+    }
+  }
+  EXPECT_GT(remeasured, 0) << "no weak signature on this design: the check above tested nothing";
 
   const TinyRun null = tiny_calibration(dir, {}, 22);
   EXPECT_FALSE(null.truth.signal.known);
