@@ -201,18 +201,37 @@ class Loop {
     terms.assign(cands.size(), EffectTerm{});
     measure_signatures(cands, all, base, terms, "moved by their physical steps");
     // A signature lost in the noise points the score test nowhere (the data's residual is
-    // projected on a direction that is mostly noise): measure it again at its range's end.
+    // projected on a direction that is mostly noise): measure it again at its range's end and
+    // keep the step that moved the model more clearly (responses are not monotonic: a step
+    // twice as large can move it less), with both sizes in the effect's term.
     std::vector<std::size_t> weak;
+    std::vector<Candidate> first;
+    std::vector<EffectTerm> first_terms;
     for (std::size_t c = 0; c < cands.size(); ++c) {
       const double far = far_step(cands[c], *find_effect(cands[c].effect));
       if (cands[c].signature_chi2 < def_.weak_signature_chi2_per_point * cands[c].signature_dof && far != 0) {
-        cands[c].first_step = cands[c].step;
-        cands[c].first_visibility_p = cands[c].visibility_p;
-        cands[c].step = far;
         weak.push_back(c);
+        first.push_back(cands[c]);
+        first_terms.push_back(terms[c]);
+        cands[c].step = far;
       }
     }
-    if (!weak.empty()) measure_signatures(cands, weak, base, terms, "weak at their steps, measured at their ranges' ends");
+    if (weak.empty()) return cands;
+    measure_signatures(cands, weak, base, terms, "weak at their steps, measured at their ranges' ends");
+    for (std::size_t k = 0; k < weak.size(); ++k) {
+      Candidate& at_far = cands[weak[k]];
+      EffectTerm& far_term = terms[weak[k]];
+      const bool far_clearer = at_far.signature_chi2 > first[k].signature_chi2;
+      Candidate kept = far_clearer ? at_far : first[k];
+      const Candidate& other = far_clearer ? first[k] : at_far;
+      EffectTerm term = far_clearer ? far_term : first_terms[k];
+      add_measured_size(term, far_clearer ? first_terms[k] : far_term, other.step);
+      kept.other_step = other.step;
+      kept.other_visibility_p = other.visibility_p;
+      kept.other_signature_chi2 = other.signature_chi2;
+      at_far = std::move(kept);
+      far_term = std::move(term);
+    }
     return cands;
   }
 
@@ -243,7 +262,6 @@ class Loop {
         else if (s.mean != 0) chi2 += 1e6;  // a deterministic shift
       }
       EffectTerm t = EffectTerm::single_step(e.name, e.key, cand.neutral, e.lo, e.hi, cand.step, slope, slope_se);
-      if (cand.first_step != 0) keep_first_step(t, terms[which[k]], cand.first_step);
       cand.signature = t.slope;
       cand.signature_chi2 = chi2;
       cand.signature_dof = dof;
@@ -253,15 +271,15 @@ class Loop {
     }
   }
 
-  // The physical step's shifts stay in the term measured at the range's end: they are
+  // A size measured for a signature that was not kept stays in the effect's term: those are
   // runs already made, and the size fit uses every measured size.
-  static void keep_first_step(EffectTerm& term, const EffectTerm& first, double first_step) {
+  static void add_measured_size(EffectTerm& term, const EffectTerm& other, double other_step) {
     std::vector<double> shift, se;
-    for (std::size_t i = 0; i < first.slope.size(); ++i) {
-      shift.push_back(first.slope[i] * first_step);
-      se.push_back(first.slope_se[i] * std::abs(first_step));
+    for (std::size_t i = 0; i < other.slope.size(); ++i) {
+      shift.push_back(other.slope[i] * other_step);
+      se.push_back(other.slope_se[i] * std::abs(other_step));
     }
-    term.add_size(first_step, shift, se);
+    term.add_size(other_step, shift, se);
   }
 
   // Measure an effect the loop is about to add at more sizes across its range

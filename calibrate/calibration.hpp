@@ -73,8 +73,10 @@ struct Candidate {
   std::string key;
   double neutral = 0;          // the template's value
   double step = 0;             // the step used (key units)
-  double first_step = 0;       // the physical step, when it was too weak and `step` is the range's end (else 0)
-  double first_visibility_p = 1;  // visibility at first_step
+  double other_step = 0;       // a second step measured (else 0): the range's end, tried because the physical step
+                               // was weak; `step` is whichever of the two moved the model more clearly
+  double other_visibility_p = 1;  // visibility at other_step
+  double other_signature_chi2 = 0;// its paired chi^2
   bool visible = false;        // the step moved the model beyond its noise (p < visible_p)
   double visibility_p = 1;
   double signature_chi2 = 0;   // paired chi^2 of the step's shift over the fitted points

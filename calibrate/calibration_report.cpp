@@ -71,10 +71,10 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                      i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals));
     for (std::size_t c = 0; c < rd.candidates.size(); ++c) {
       const Candidate& k = rd.candidates[c];
-      o << fmt::format(R"({}{{"effect": {}, "step": {}, "first_step": {}, "first_visibility_p": {}, "visible": {}, "visibility_p": {}, "signature_chi2": {}, "signature_points": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "group": {}}})",
+      o << fmt::format(R"({}{{"effect": {}, "step": {}, "other_step": {}, "other_visibility_p": {}, "visible": {}, "visibility_p": {}, "signature_chi2": {}, "signature_points": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "group": {}}})",
                        c ? ", " : "", json_string(k.effect), json_number(k.step),
-                       k.first_step != 0 ? json_number(k.first_step) : "null",
-                       k.first_step != 0 ? json_number(k.first_visibility_p) : "null", k.visible ? "true" : "false",
+                       k.other_step != 0 ? json_number(k.other_step) : "null",
+                       k.other_step != 0 ? json_number(k.other_visibility_p) : "null", k.visible ? "true" : "false",
                        json_number(k.visibility_p), json_number(k.signature_chi2), k.signature_dof, json_number(k.score.statistic), json_number(k.score.p),
                        json_number(k.p_adjusted), json_number(k.score.estimate), k.group);
     }
@@ -103,6 +103,19 @@ void write_points_csv(std::ostream& o, const DataFile& data, const CalibrationRe
                      data.points[i].se, model_value(b, i), model_se(b, i), model_value(a, i), model_se(a, i),
                      r.before.whitened[i], r.after.whitened[i]);
   }
+}
+
+// The step column: one step, or the two measured (the kept one last, or the tried one in brackets).
+std::string step_text(const Candidate& c) {
+  if (c.other_step == 0) return fmt::format("{:.3g}", c.step);
+  if (std::abs(c.step) > std::abs(c.other_step)) return fmt::format("{:.3g} -> {:.3g}", c.other_step, c.step);
+  return fmt::format("{:.3g} ({:.3g} tried)", c.step, c.other_step);
+}
+
+std::string visibility_text(const Candidate& c) {
+  if (c.other_step == 0) return fmt::format("{:.2g}", c.visibility_p);
+  if (std::abs(c.step) > std::abs(c.other_step)) return fmt::format("{:.2g} -> {:.2g}", c.other_visibility_p, c.visibility_p);
+  return fmt::format("{:.2g}; {:.2g} at {:.3g}", c.visibility_p, c.other_visibility_p, c.other_step);
 }
 
 std::string errors_row(const char* what, const ErrorMeasures& e) {
@@ -135,16 +148,15 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
   o << errors_row("after, fitted, fresh seeds", r.after.fitted_fresh) << errors_row("after, held out, fresh seeds", r.after.held_out_fresh);
   o << fmt::format("\nParameters before: {}. After: {}. BIC {:.2f} -> {:.2f}.\n", r.before.params.label(), r.after.params.label(),
                    r.before.bic, r.after.bic);
-  o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates. A step whose paired chi2 stays below 4 per fitted point (2 se a point) leaves a signature mostly noise: it is taken again to the end of the effect's range (shown as *step -> end*, with both visibilities).\n";
+  o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates. A step whose paired chi2 stays below 4 per fitted point (2 se a point) leaves a signature mostly noise: the effect is moved again to the end of its range and the step that moved the model more clearly is used (*step -> end*: the end; *step (end tried)*: the first).\n";
   for (std::size_t i = 0; i < r.rounds.size(); ++i) {
     const Round& rd = r.rounds[i];
     o << fmt::format("\n### Round {}\n\n| effect | step | visible (p) | score | p | adjusted p | linearised size | group |\n|---|---|---|---|---|---|---|---|\n", i + 1);
     for (const Candidate& c : rd.candidates)
       o << fmt::format("| {} | {} | {} ({}) | {} | {} | {} | {} | {} |\n", c.effect,
-                       c.first_step != 0 ? fmt::format("{:.3g} -> {:.3g}", c.first_step, c.step) : fmt::format("{:.3g}", c.step),
+                       step_text(c),
                        c.visible ? "yes" : "no",
-                       c.first_step != 0 ? fmt::format("{:.2g} -> {:.2g}", c.first_visibility_p, c.visibility_p)
-                                         : fmt::format("{:.2g}", c.visibility_p),
+                       visibility_text(c),
                        c.visible ? fmt::format("{:.2f}", c.score.statistic) : "",
                        c.visible ? fmt::format("{:.3g}", c.score.p) : "", c.visible ? fmt::format("{:.3g}", c.p_adjusted) : "",
                        c.visible ? fmt::format("{:.4g} ± {:.2g}", c.neutral + c.score.estimate, c.score.se) : "",

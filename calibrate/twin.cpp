@@ -8,6 +8,7 @@
 #include "common/text_file.hpp"
 #include "common/toml_strict.hpp"
 
+#include <Eigen/Dense>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -85,26 +86,52 @@ double calibration_sigma(const DataFile& design, const TwinDef& def, const Predi
   return std::hypot(std::hypot(with.se_fit[i], floor), with.se_fit[i] * std::sqrt(model_share));
 }
 
-// chi^2 over the fitted points between the twin's data and the model without the
-// planted effects, both on the twin's seeds (their difference is not the packing).
-// Infinite where the model without the effects gives no value at some point (a node
-// that cannot be compared, rather than a made-up penalty the refinement would bend to).
-double chi2_between(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without) {
-  double chi2 = 0;
-  for (std::size_t i = 0; i < design.points.size(); ++i) {
-    if (design.points[i].held_out || !with.valid[i]) continue;
-    if (!without.valid[i]) return std::numeric_limits<double>::infinity();
-    const double w = (with.fit[i] - without.fit[i]) / calibration_sigma(design, def, with, i);
-    chi2 += w * w;
+// Variance of the mean paired difference at point i: the spread of with - without over the
+// replicates both have (same seeds), over their number. 0 with fewer than two pairs.
+double paired_difference_variance(const Prediction& with, const Prediction& without, std::size_t i) {
+  std::vector<double> d;
+  const std::size_t n = std::min(with.replicate_fit[i].size(), without.replicate_fit[i].size());
+  for (std::size_t r = 0; r < n; ++r) {
+    const double a = with.replicate_fit[i][r], b = without.replicate_fit[i][r];
+    if (std::isfinite(a) && std::isfinite(b)) d.push_back(a - b);
   }
-  return chi2;
+  if (d.size() < 2) return 0.0;
+  const Summary s = summarize(d);
+  return s.se() * s.se();
 }
 
-// lambda = min over the free parameter of chi2_between: how far the data with the
+// The minimum over the friction grid of node values that each carry noise (sd ~6 on the
+// blind design): the smallest node alone is biased low (it is the luckiest of several), so
+// a parabola is fitted by least squares through the five nodes around it (equally spaced;
+// fewer at the grid's ends) and its minimum taken inside them.
+double smoothed_minimum(const std::vector<double>& y, std::size_t best) {
+  const std::size_t lo = best >= 2 ? best - 2 : 0, hi = std::min(y.size() - 1, best + 2);
+  std::vector<double> xs, ys;
+  for (std::size_t k = lo; k <= hi; ++k)
+    if (std::isfinite(y[k])) xs.push_back(static_cast<double>(k)), ys.push_back(y[k]);
+  if (xs.size() < 3) return y[best];
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(xs.size()), 3);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(xs.size()));
+  for (std::size_t k = 0; k < xs.size(); ++k) {
+    const auto r = static_cast<Eigen::Index>(k);
+    A(r, 0) = 1, A(r, 1) = xs[k], A(r, 2) = xs[k] * xs[k];
+    b(r) = ys[k];
+  }
+  const Eigen::Vector3d c = A.colPivHouseholderQr().solve(b);
+  const auto at = [&](double x) { return c(0) + c(1) * x + c(2) * x * x; };
+  double m = std::min(at(xs.front()), at(xs.back()));
+  if (c(2) > 0) {
+    const double vertex = -c(1) / (2 * c(2));
+    if (vertex > xs.front() && vertex < xs.back()) m = std::min(m, at(vertex));
+  }
+  return m;
+}
+
+// lambda = min over the free parameter of planted_noncentrality: how far the data with the
 // planted effects lie from everything the model without them can reach by refitting
 // (the nonlinear projection; friction saturates, so a linear one overstates lambda).
-// One free parameter: its calibration grid, refined by a parabola through the best
-// node and its neighbours. Several: their true values only (an upper bound, said so).
+// One free parameter: its calibration grid, smoothed by a least-squares parabola around
+// the best node (smoothed_minimum). Several: their true values only (an upper bound, said so).
 PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const TwinTruth& truth, const Prediction& with,
                              Evaluator& ev) {
   PlantedSignal sig;
@@ -121,15 +148,10 @@ PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const T
   }
   const std::vector<Prediction> p = ev.evaluate(sets, truth.model_seed, def.replicates);
   std::vector<double> chi2;
-  for (const Prediction& q : p) chi2.push_back(chi2_between(design, def, with, q));
+  for (const Prediction& q : p) chi2.push_back(planted_noncentrality(design, def, with, q));
   const std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
   if (!std::isfinite(chi2[best])) return sig;  // no node gives every point a value: nothing to compare
-  sig.chi2 = chi2[best];
-  if (best > 0 && best + 1 < chi2.size() && std::isfinite(chi2[best - 1]) && std::isfinite(chi2[best + 1])) {
-    // parabola through three equally spaced nodes
-    const double curvature = chi2[best - 1] - 2 * chi2[best] + chi2[best + 1];
-    if (curvature > 0) sig.chi2 = std::max(0.0, chi2[best] - std::pow(chi2[best + 1] - chi2[best - 1], 2) / (8 * curvature));
-  }
+  sig.chi2 = std::max(0.0, smoothed_minimum(chi2, best));
   for (std::size_t i = 0; i < design.points.size(); ++i) sig.points += !design.points[i].held_out && with.valid[i] ? 1 : 0;
   int candidates = 0;
   for (const EffectDef& e : effect_catalogue()) candidates += effect_applies(e, def.model, design) ? 1 : 0;
@@ -156,6 +178,32 @@ double option_number(const std::string& text, const std::string& option) {
 }
 
 }  // namespace
+
+// The planted effects' noncentrality over the fitted points: the twin's data against the
+// model without the effects, both on the twin's seeds, in units of the noise a calibration
+// sees. Same seeds do not make the difference noise-free: any parameter change parts the
+// trajectories of a granular flow within a few collisions, after which the paired runs are
+// as independent as any two. So the paired difference's own variance (from the spread of the
+// replicate differences) is subtracted: what is left estimates signal^2, unbiased, and is
+// what a score test that knew the signature would see beyond the noise (an effect the model
+// barely feels gives ~0 here, not n_points x the decorrelation noise).
+// Infinite where the model without the effects gives no value at some point (a node
+// that cannot be compared, rather than a made-up penalty the refinement would bend to).
+double planted_noncentrality(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without) {
+  double chi2 = 0;
+  for (std::size_t i = 0; i < design.points.size(); ++i) {
+    if (design.points[i].held_out || !with.valid[i]) continue;
+    if (!without.valid[i]) return std::numeric_limits<double>::infinity();
+    const double d = with.fit[i] - without.fit[i];
+    const double sigma = calibration_sigma(design, def, with, i);
+    // sigma comes from the same n runs: E[1/s^2] = (n-1)/(n-3) / tau^2 for normal replicates,
+    // so the ratio is scaled back to the true noise's (approximately: the floor is exact).
+    const double n = static_cast<double>(with.replicate_fit[i].size());
+    const double inverse_bias = n > 3 ? (n - 3) / (n - 1) : 1.0;
+    chi2 += inverse_bias * (d * d - paired_difference_variance(with, without, i)) / (sigma * sigma);
+  }
+  return chi2;  // below 0 where the noise outweighs the signal: the caller clamps after smoothing
+}
 
 TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
   TwinTruth t;

@@ -37,7 +37,8 @@ struct PlantedValue {
 // study; `gapflow calibrate` never reads it.
 struct PlantedSignal {
   bool known = false;     // false: nothing planted (a null twin, or the other model's data as they are)
-  double chi2 = 0;        // lambda = min over the free parameter of chi^2(data, model without the effects), fitted points
+  double chi2 = 0;        // lambda = min over the free parameter of chi^2(data, model without the effects) less the
+                          // paired runs' own noise: the noncentrality, fitted points (dimensionless)
   int points = 0;         // fitted points
   double critical = 0;    // the score test's threshold, Bonferroni over every applicable effect (the loop: visible ones)
   double oracle_power = 0;// P(score > critical) for a score test that knew the planted signature
@@ -48,6 +49,12 @@ struct TwinTruth {
   std::uint64_t model_seed = 0;  // run.seed of the twin's runs (never the calibration's)
   PlantedSignal signal;
 };
+
+// The planted effects' noncentrality over the design's fitted points: the squared
+// difference between `with` and `without` (same seeds) in units of the noise a calibration
+// of the twin sees, less the paired runs' own noise (calibrate/twin.cpp says why); below 0
+// where the noise outweighs the signal.
+double planted_noncentrality(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without);
 
 // The planted values (drawn from def.seed), without running anything.
 TwinTruth draw_twin(const DataFile& design, const TwinDef& def);
