@@ -208,7 +208,7 @@ class Loop {
     std::vector<Candidate> first;
     std::vector<EffectTerm> first_terms;
     for (std::size_t c = 0; c < cands.size(); ++c) {
-      const double far = far_step(cands[c], *find_effect(cands[c].effect));
+      const double far = valid_far_step(cands[c]);
       if (cands[c].signature_chi2 < def_.weak_signature_chi2_per_point * cands[c].signature_dof && far != 0) {
         weak.push_back(c);
         first.push_back(cands[c]);
@@ -221,7 +221,12 @@ class Loop {
     for (std::size_t k = 0; k < weak.size(); ++k) {
       Candidate& at_far = cands[weak[k]];
       EffectTerm& far_term = terms[weak[k]];
-      const bool far_clearer = at_far.signature_chi2 > first[k].signature_chi2;
+      // Clearer: the smaller visibility p (the two may count different points where one step
+      // leaves some undefined); where both underflow, the larger chi^2 per point.
+      const bool far_clearer =
+          at_far.visibility_p < first[k].visibility_p ||
+          (at_far.visibility_p == first[k].visibility_p &&
+           at_far.signature_chi2 / std::max(1, at_far.signature_dof) > first[k].signature_chi2 / std::max(1, first[k].signature_dof));
       Candidate kept = far_clearer ? at_far : first[k];
       const Candidate& other = far_clearer ? first[k] : at_far;
       EffectTerm term = far_clearer ? far_term : first_terms[k];
@@ -229,10 +234,22 @@ class Loop {
       kept.other_step = other.step;
       kept.other_visibility_p = other.visibility_p;
       kept.other_signature_chi2 = other.signature_chi2;
+      // The better of two looks: visible only at half the level (Bonferroni over the two), so
+      // that a weak effect's chance of passing for visible stays at visible_p.
+      kept.visible = kept.visibility_p < def_.visible_p / 2;
       at_far = std::move(kept);
       far_term = std::move(term);
     }
     return cands;
+  }
+
+  // The range's end on the step's side (far_step), moved toward neutral until every point
+  // still makes a scenario there (a corner radius cannot exceed an obstruction's inradius),
+  // as the refinement does; 0 once that leaves less than 1.5 steps.
+  double valid_far_step(const Candidate& c) const {
+    double far = far_step(c, *find_effect(c.effect));
+    for (int k = 0; k < 20 && far != 0 && !valid_everywhere(c.key, c.neutral + far); ++k) far *= 0.8;
+    return std::abs(far) >= 1.5 * std::abs(c.step) && valid_everywhere(c.key, c.neutral + far) ? far : 0.0;
   }
 
   // Move the candidates `which` by their steps at every baseline node (same seeds) and

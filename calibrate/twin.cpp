@@ -79,11 +79,28 @@ ParameterSet without_planted_effects(const DataFile& design, const TwinTruth& tr
 }
 
 // The noise a calibration of the twin sees at point i, on the fit scale: the twin
-// file's se (with the design's floor) and the model's at the design's replicate count.
-double calibration_sigma(const DataFile& design, const TwinDef& def, const Prediction& with, std::size_t i) {
+// file's se (with the design's floor) and the model's at the design's replicate count,
+// from a standard error `se` of the mean of def.replicates runs.
+double calibration_sigma(const DataFile& design, const TwinDef& def, const Prediction& with, std::size_t i, double se) {
   const double floor = design.floor_relative * (design.points[i].scale == FitScale::log ? 1.0 : std::abs(with.value[i]));
   const double model_share = static_cast<double>(def.replicates) / design.model_replicates;
-  return std::hypot(std::hypot(with.se_fit[i], floor), with.se_fit[i] * std::sqrt(model_share));
+  return std::hypot(std::hypot(se, floor), se * std::sqrt(model_share));
+}
+
+// The run-to-run standard error at each point from the model's runs at every grid node
+// (mean of their se^2): an estimate of the noise with ~9 x 10 runs behind it and nearly
+// independent of any one pair compared. The twin's own se would not do: its 10 runs are
+// also in the paired variance subtracted, and the two estimates move together.
+std::vector<double> pooled_se(const std::vector<Prediction>& nodes, std::size_t points) {
+  std::vector<double> se(points, 0.0);
+  for (std::size_t i = 0; i < points; ++i) {
+    double sum = 0;
+    int n = 0;
+    for (const Prediction& q : nodes)
+      if (q.valid[i] && std::isfinite(q.se_fit[i])) sum += q.se_fit[i] * q.se_fit[i], ++n;
+    se[i] = n > 0 ? std::sqrt(sum / n) : std::numeric_limits<double>::quiet_NaN();
+  }
+  return se;
 }
 
 // Variance of the mean paired difference at point i: the spread of with - without over the
@@ -103,9 +120,11 @@ double paired_difference_variance(const Prediction& with, const Prediction& with
 // The minimum over the friction grid of node values that each carry noise (sd ~6 on the
 // blind design): the smallest node alone is biased low (it is the luckiest of several), so
 // a parabola is fitted by least squares through the five nodes around it (equally spaced;
-// fewer at the grid's ends) and its minimum taken inside them.
+// moved inward at the grid's ends) and its minimum taken inside them.
 double smoothed_minimum(const std::vector<double>& y, std::size_t best) {
-  const std::size_t lo = best >= 2 ? best - 2 : 0, hi = std::min(y.size() - 1, best + 2);
+  // five nodes around the best, moved inward at the grid's ends (fewer only on a short grid)
+  const std::size_t width = std::min<std::size_t>(5, y.size());
+  const std::size_t lo = std::min(best >= 2 ? best - 2 : 0, y.size() - width), hi = lo + width - 1;
   std::vector<double> xs, ys;
   for (std::size_t k = lo; k <= hi; ++k)
     if (std::isfinite(y[k])) xs.push_back(static_cast<double>(k)), ys.push_back(y[k]);
@@ -148,7 +167,8 @@ PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const T
   }
   const std::vector<Prediction> p = ev.evaluate(sets, truth.model_seed, def.replicates);
   std::vector<double> chi2;
-  for (const Prediction& q : p) chi2.push_back(planted_noncentrality(design, def, with, q));
+  const std::vector<double> se = pooled_se(p, design.points.size());
+  for (const Prediction& q : p) chi2.push_back(planted_noncentrality(design, def, with, q, se));
   const std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
   if (!std::isfinite(chi2[best])) return sig;  // no node gives every point a value: nothing to compare
   sig.chi2 = std::max(0.0, smoothed_minimum(chi2, best));
@@ -189,18 +209,16 @@ double option_number(const std::string& text, const std::string& option) {
 // barely feels gives ~0 here, not n_points x the decorrelation noise).
 // Infinite where the model without the effects gives no value at some point (a node
 // that cannot be compared, rather than a made-up penalty the refinement would bend to).
-double planted_noncentrality(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without) {
+double planted_noncentrality(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without,
+                             const std::vector<double>& se) {
   double chi2 = 0;
   for (std::size_t i = 0; i < design.points.size(); ++i) {
     if (design.points[i].held_out || !with.valid[i]) continue;
     if (!without.valid[i]) return std::numeric_limits<double>::infinity();
     const double d = with.fit[i] - without.fit[i];
-    const double sigma = calibration_sigma(design, def, with, i);
-    // sigma comes from the same n runs: E[1/s^2] = (n-1)/(n-3) / tau^2 for normal replicates,
-    // so the ratio is scaled back to the true noise's (approximately: the floor is exact).
-    const double n = static_cast<double>(with.replicate_fit[i].size());
-    const double inverse_bias = n > 3 ? (n - 3) / (n - 1) : 1.0;
-    chi2 += inverse_bias * (d * d - paired_difference_variance(with, without, i)) / (sigma * sigma);
+    const double sigma = calibration_sigma(design, def, with, i, se[i]);
+    if (!(sigma > 0)) continue;  // no noise and no floor: nothing to measure the difference in
+    chi2 += (d * d - paired_difference_variance(with, without, i)) / (sigma * sigma);
   }
   return chi2;  // below 0 where the noise outweighs the signal: the caller clamps after smoothing
 }

@@ -52,9 +52,11 @@ struct TwinTruth {
 
 // The planted effects' noncentrality over the design's fitted points: the squared
 // difference between `with` and `without` (same seeds) in units of the noise a calibration
-// of the twin sees, less the paired runs' own noise (calibrate/twin.cpp says why); below 0
-// where the noise outweighs the signal.
-double planted_noncentrality(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without);
+// of the twin sees, built from `se` (per point: the run-to-run standard error of a mean of
+// def.replicates runs, estimated independently of this pair), less the paired runs' own
+// noise (calibrate/twin.cpp says why). Below 0 where the noise outweighs the signal.
+double planted_noncentrality(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without,
+                             const std::vector<double>& se);
 
 // The planted values (drawn from def.seed), without running anything.
 TwinTruth draw_twin(const DataFile& design, const TwinDef& def);

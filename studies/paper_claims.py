@@ -410,7 +410,7 @@ def screen_pick_claim(t, retest):
     if not rows:
         t.add(claim, "2d -> 3d", "no re-tested position", "not testable", "")
         return
-    above = [r for r in rows if r["verdict"] == "significantly above"]
+    above = [r for r in rows if significantly(r, "significantly above")]
     evidence = "; ".join(f"{r['series']} D = {fmt(num(r, 'obstruction.distance_mm'))} mm: J/J_0 {ratio_text(r)}, "
                          f"Welch p {fmt(num(r, 'welch_p'))} ({r['verdict']}, {int(num(r, 'n_runs'))} runs)" for r in rows)
     verdict = "held" if len(above) == len(rows) else "partly held" if above else "not held"
