@@ -341,6 +341,13 @@ struct ReportRequest {
   std::optional<Compare> compare;
   std::optional<JKind> j;  // --j: the flow rate the analyses use, instead of the study's [report] j
 };
+// --compare: where two study files (TOML text; sources for error messages) fix different
+// settings for the series they share, one line each ("" differences: the same). The [study]
+// set and, per common series, the scenario file name and set are compared; [per_model] sets
+// are one model's and are not (studies/report_compare.cpp).
+std::vector<std::string> study_setting_differences(std::string_view own_text, const std::string& own_source,
+                                                   std::string_view other_text, const std::string& other_source);
+
 // The command that regenerates the report (paths as given).
 std::string regenerate_command(const ReportRequest& r);
 

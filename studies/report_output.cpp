@@ -167,8 +167,27 @@ std::vector<StoredRun> load_runs(const fs::path& db, const StudyInfo& info) {
 // --compare: the other store's runs of one model, relabelled as this study's. Refused when
 // this store has runs of that model too (two sources for one point) or when the other store's
 // runs of it belong to several studies (which one is meant?).
+// A study's file as recorded in a store (nullptr if not recorded).
+const StudyFileRecord* recorded_file(const std::vector<StudyFileRecord>& files, const std::string& study) {
+  for (const StudyFileRecord& f : files)
+    if (f.study == study) return &f;
+  return nullptr;
+}
+
+// The note's sentence on whether the two study files fix the same settings.
+std::string settings_sentence(const StudyFileRecord* own, const StudyFileRecord* other) {
+  if (!own || !other) return "Whether the two study files fix the same settings was not checked (a study file is not recorded).";
+  const std::vector<std::string> d = study_setting_differences(own->text, own->source, other->text, other->source);
+  if (d.empty())
+    return "The two study files fix the same settings for the series they share ([study] set, each series' scenario and set; "
+           "[per_model] sets are one model's and not compared).";
+  return fmt::format("**The two study files fix different settings** (here: {}; there: {}): {}. Differences in J between "
+                     "the models may be these settings', not the models'.",
+                     own->source, other->source, fmt::join(d, "; "));
+}
+
 std::vector<StoredRun> compared_runs(const ReportRequest::Compare& c, const std::vector<StoredRun>& own,
-                                     std::string& note) {
+                                     const StudyFileRecord* own_file, std::string& note) {
   if (std::any_of(own.begin(), own.end(), [&](const StoredRun& r) { return r.id.model == c.model; }))
     throw std::invalid_argument(fmt::format("--compare {}=...: the study's own store already has {} runs", c.model, c.model));
   const fs::path db = store_file(c.results);
@@ -180,9 +199,11 @@ std::vector<StoredRun> compared_runs(const ReportRequest::Compare& c, const std:
     throw std::invalid_argument(fmt::format("--compare {}={}: {} holds {} runs of {} studies ({}); exactly one is needed",
                                             c.model, c.results.string(), db.string(), c.model, studies.size(),
                                             fmt::join(studies, ", ")));
+  const std::vector<StudyFileRecord> other_files = Store(db, StoreAccess::read).study_files();
   note = fmt::format("The {} runs ({}) are those of study \"{}\", read from {} (`--compare`): the same series and "
-                     "point grid, run by that study with its own settings; this study ran none of them.",
-                     c.model, runs.size(), *studies.begin(), db.string());
+                     "point grid, run by that study with its own settings; this study ran none of them. {}",
+                     c.model, runs.size(), *studies.begin(), db.string(),
+                     settings_sentence(own_file, recorded_file(other_files, *studies.begin())));
   const std::string name = own.front().id.study;  // load_runs left one study
   for (StoredRun& r : runs) r.id.study = name;
   return runs;
@@ -286,7 +307,15 @@ ReportOutcome make_report(const ReportRequest& request, std::ostream& out, std::
   std::string compare_note;
   std::vector<StoredRun> all = runs;
   if (request.compare) {
-    const std::vector<StoredRun> other = compared_runs(*request.compare, runs, compare_note);
+    // This study's file: the one given, else the one its store recorded.
+    StudyFileRecord own_file;
+    const std::vector<StudyFileRecord> recorded = Store(db, StoreAccess::read).study_files();
+    const StudyFileRecord* own = recorded_file(recorded, info.name);
+    if (request.study) {
+      own_file = {info.name, request.study->string(), read_input_file(*request.study, "study file"), ""};
+      own = &own_file;
+    }
+    const std::vector<StoredRun> other = compared_runs(*request.compare, runs, own, compare_note);
     all.insert(all.end(), other.begin(), other.end());
   }
   const ReportData data = collect_report_data(all, info);

@@ -690,6 +690,7 @@ TEST(ReportModels, CompareBringsTheOtherModelsRunsFromAnotherStore) {
   EXPECT_NE(md.find("--compare 3d="), std::string::npos);
   EXPECT_NE(md.find(" --j mid"), std::string::npos);
   EXPECT_NE(md.find("# Study report: synthetic"), std::string::npos) << "relabelled as the own study's";
+  EXPECT_NE(md.find("fix the same settings was not checked"), std::string::npos) << "no study file recorded";
 
   const auto error_of = [&](ReportRequest q) -> std::string {
     try {
@@ -718,6 +719,35 @@ TEST(ReportModels, CompareBringsTheOtherModelsRunsFromAnotherStore) {
   q = r;
   q.compare = ReportRequest::Compare{"3d", dir / "none.sqlite"};
   EXPECT_NE(error_of(q).find("holds 3d runs of 0 studies"), std::string::npos) << error_of(q);
+}
+
+// --compare: the two study files' settings for their common series, [per_model] sets aside.
+TEST(ReportModels, CompareNamesTheSettingsTheTwoStudyFilesFixDifferently) {
+  const std::string own = R"([study]
+name = "own"
+set = ["run.time_limit_s=40", "run.stop_after_no_flow_s=20"]
+[per_model.2d]
+set = ["model.box2d.rolling_contact=1"]
+[[series]]
+label = "none"
+scenario = "../../scenarios/paper/cylinder.toml"
+set = ["obstruction.shape=none"]
+[[series]]
+label = "cyl"
+scenario = "../../scenarios/paper/cylinder.toml"
+)";
+  std::string other = own;
+  EXPECT_TRUE(study_setting_differences(own, "own.toml", other, "other.toml").empty());
+  other.replace(other.find("rolling_contact=1"), 17, "rolling_contact=0");  // one model's: not compared
+  EXPECT_TRUE(study_setting_differences(own, "own.toml", other, "other.toml").empty());
+  other.replace(other.find("time_limit_s=40"), 15, "time_limit_s=60");
+  other.replace(other.find("scenarios/paper/cylinder.toml\"\nset"), 29, "scenarios/paper/v_obstruction.toml");
+  other += "set = [\"obstruction.corner_radius_mm=1\"]\n[[series]]\nlabel = \"only-there\"\nscenario = \"x.toml\"\n";
+  const std::vector<std::string> d = study_setting_differences(own, "own.toml", other, "other.toml");
+  ASSERT_EQ(d.size(), 3u) << fmt::format("{}", fmt::join(d, " | "));
+  EXPECT_EQ(d[0], "[study] set run.time_limit_s: 40 here, 60 there");
+  EXPECT_EQ(d[1], "series 'cyl' set obstruction.corner_radius_mm: unset here, 1 there");
+  EXPECT_EQ(d[2], "series 'none' scenario: cylinder.toml here, v_obstruction.toml there");
 }
 
 // ------------------------------------------------------------------ clogging
