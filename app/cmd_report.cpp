@@ -39,9 +39,7 @@ int cmd_report(const ReportCommand::Options& o) {
       throw std::invalid_argument("--compare '" + o.compare + "': expected MODEL=STORE with MODEL 2d or 3d, e.g. 3d=results/flow-vs-distance");
     r.compare = ReportRequest::Compare{model, o.compare.substr(eq + 1)};
   }
-  if (o.j == "paper") r.j = JKind::paper;
-  if (o.j == "flowing") r.j = JKind::flowing;
-  if (o.j == "mid") r.j = JKind::mid;
+  if (!o.j.empty()) r.j = jkind_from_option(o.j);
   if (o.pairing && r.compare) throw std::invalid_argument("--pairing compares runs of one store: drop --compare");
   if (o.pairing) {  // a measurement printed, no file written
     const ReportData data = load_report_data(r, std::cerr);
@@ -73,7 +71,7 @@ ReportCommand::ReportCommand(CLI::App& app) : o_(std::make_unique<Options>()) {
                     "MODEL=STORE: that model's runs from another study's store join the report (same series and "
                     "points), e.g. --compare 3d=results/flow-vs-distance for a 2D-only re-run");
   o.cmd->add_option("--j", o.j, "Flow rate for the analyses instead of the study's [report] j: paper, flowing or mid")
-      ->check(CLI::IsMember({"paper", "flowing", "mid"}));
+      ->check(CLI::IsMember(jkind_option_names()));
   o.cmd->add_flag("--no-snapshots", o.no_snapshots,
                   "Do not re-simulate one stored run per point class for the report's top-view snapshots");
 }

@@ -188,13 +188,39 @@ PointStatistics analyze_point(const std::vector<RunRecord>& runs, const Analysis
   return p;
 }
 
-const char* to_string(JKind k) {
-  switch (k) {
-    case JKind::paper: return "J_paper";
-    case JKind::flowing: return "J_flowing";
-    case JKind::mid: return "J_mid";
-  }
-  return "?";
+namespace {
+// Each flow rate's name in study files and on the command line, and in tables and reports.
+struct JKindNames {
+  JKind kind;
+  const char* option;
+  const char* label;
+};
+constexpr JKindNames kJKindNames[] = {{JKind::paper, "paper", "J_paper"},
+                                      {JKind::flowing, "flowing", "J_flowing"},
+                                      {JKind::mid, "mid", "J_mid"}};
+const JKindNames& names_of(JKind k) {
+  for (const JKindNames& n : kJKindNames)
+    if (n.kind == k) return n;
+  return kJKindNames[0];  // unreachable: every enumerator is in the table
+}
+}  // namespace
+
+const char* option_name(JKind k) { return names_of(k).option; }
+const char* to_string(JKind k) { return names_of(k).label; }
+
+const std::vector<std::string>& jkind_option_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (const JKindNames& n : kJKindNames) v.push_back(n.option);
+    return v;
+  }();
+  return names;
+}
+
+std::optional<JKind> jkind_from_option(std::string_view name) {
+  for (const JKindNames& n : kJKindNames)
+    if (name == n.option) return n.kind;
+  return std::nullopt;
 }
 
 const SampleStatistics& j_stats(const PointStatistics& s, JKind k) {

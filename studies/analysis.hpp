@@ -13,6 +13,8 @@
 //   * the decomposition J = <s> / (<T_flow> + <T_clog>) (definitions at FlowDecomposition).
 //   * regime fractions and a label.
 #pragma once
+#include <string_view>
+#include <optional>
 
 #include "common/run_record.hpp"
 #include "common/statistics.hpp"
@@ -155,7 +157,10 @@ PointStatistics analyze_point(const std::vector<RunRecord>& runs, const Analysis
 // JKind::paper -- check PointStatistics::all_passed_fraction (or regime) next to the verdict.
 enum class JKind { paper, flowing, mid };
 enum class Pairing { when_exact, never };
-const char* to_string(JKind k);
+const char* to_string(JKind k);           // "J_paper", "J_flowing", "J_mid" (tables, reports)
+const char* option_name(JKind k);         // "paper", "flowing", "mid": study files ([report] j) and --j
+const std::vector<std::string>& jkind_option_names();  // every option_name, in enum order
+std::optional<JKind> jkind_from_option(std::string_view name);
 // The J statistics, values and their runs' keys of one kind.
 const SampleStatistics& j_stats(const PointStatistics& s, JKind k);
 const std::vector<double>& j_values(const PointStatistics& s, JKind k);

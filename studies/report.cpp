@@ -103,7 +103,8 @@ ReportOptions read_report_table(const toml::table& t, const std::string& source)
   if (const toml::node* k = t.get("kind")) o.kinds = read_kinds(*k, source);
   if (t.get("baseline")) o.baseline = read_text(t, source, "baseline");
   if (const toml::node* j = t.get("j"))
-    o.j = choose<JKind>(*j, source, "j", {{"paper", JKind::paper}, {"flowing", JKind::flowing}, {"mid", JKind::mid}});
+    o.j = choose<JKind>(*j, source, "j", {{option_name(JKind::paper), JKind::paper}, {option_name(JKind::flowing), JKind::flowing},
+                                          {option_name(JKind::mid), JKind::mid}});
   if (const toml::node* q = t.get("pairing"))
     o.pairing = choose<Pairing>(*q, source, "pairing", {{"unpaired", Pairing::never}, {"paired", Pairing::when_exact}});
   if (t.get("fit_w_min")) o.fit_w_min = read_number(t, source, "fit_w_min");

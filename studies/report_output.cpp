@@ -132,7 +132,7 @@ std::string regenerate_command(const ReportRequest& r) {
   if (!r.plots) c += " --no-plots";
   if (!r.snapshots) c += " --no-snapshots";
   if (r.compare) c += " --compare " + shell_quote(r.compare->model + "=" + r.compare->results.string());
-  if (r.j) c += *r.j == JKind::paper ? " --j paper" : *r.j == JKind::flowing ? " --j flowing" : " --j mid";
+  if (r.j) c += std::string(" --j ") + option_name(*r.j);
   return c;
 }
 

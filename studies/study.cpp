@@ -8,6 +8,7 @@
 #include "common/text_file.hpp"
 #include "common/toml_parse.hpp"
 #include "common/toml_strict.hpp"
+#include "studies/analysis.hpp"
 #include "studies/screen_loader.hpp"
 
 #include <fmt/format.h>
@@ -35,7 +36,7 @@ const std::vector<std::string> kPlanKeys{"replicates", "thin", "set"};
 const std::vector<std::string> kModelNames{"2d", "3d"};
 const std::vector<std::string> kConfirmKeys{"model", "top", "replicates", "rank_by", "set"};
 const std::vector<std::string> kReportKeys{"kind", "baseline", "j", "fit_w_min", "fit_w_max", "pairing"};
-const std::vector<std::string> kJKinds{"paper", "flowing", "mid"};
+const std::vector<std::string>& kJKinds = jkind_option_names();
 const std::vector<std::string> kReportKinds{"flow_vs_gap", "flow_vs_distance", "clogging", "models", "screen_confirm"};
 
 // run.seed and run.replicate belong to the job ([study] seed, replicates): an

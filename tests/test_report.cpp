@@ -976,3 +976,14 @@ TEST(ReportPieces, ShippedStudiesReportTablesReadTheSameAsTheStudyLoader) {
   }
   EXPECT_GT(n, 0) << "no shipped study files";
 }
+
+// One table names each flow rate: in study files and --j ("mid"), and in tables ("J_mid").
+TEST(ReportOptions, FlowRateNamesRoundTrip) {
+  ASSERT_EQ(jkind_option_names(), (std::vector<std::string>{"paper", "flowing", "mid"}));
+  for (JKind k : {JKind::paper, JKind::flowing, JKind::mid}) {
+    EXPECT_EQ(jkind_from_option(option_name(k)), k);
+    EXPECT_EQ(std::string(to_string(k)), std::string("J_") + option_name(k));
+  }
+  EXPECT_FALSE(jkind_from_option("J_mid").has_value());
+  EXPECT_FALSE(jkind_from_option("").has_value());
+}
