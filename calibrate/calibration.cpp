@@ -12,6 +12,7 @@
 #include <cmath>
 #include <iostream>
 #include <map>
+#include <optional>
 
 namespace gapflow {
 
@@ -156,13 +157,6 @@ Eigen::VectorXd fitted_whitened(const DataFile& data, const Prediction& at, cons
   return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
 }
 
-// The step to the end of the effect's range on its step's side, if that is at least
-// 1.5 steps (else 0: there is no larger step to take).
-double far_step(const Candidate& c, const EffectDef& e) {
-  const double end = (c.step > 0 ? e.hi : e.lo) - c.neutral;
-  return std::abs(end) >= 1.5 * std::abs(c.step) ? end : 0.0;
-}
-
 // A step that stays inside [lo, hi] from `at` (reversed if needed).
 double step_inside(double at, double step, double lo, double hi) {
   if (at + step <= hi + 1e-12 && at + step >= lo - 1e-12) return step;
@@ -243,13 +237,21 @@ class Loop {
     return cands;
   }
 
-  // The range's end on the step's side (far_step), moved toward neutral until every point
-  // still makes a scenario there (a corner radius cannot exceed an obstruction's inradius),
-  // as the refinement does; 0 once that leaves less than 1.5 steps.
+  // The range's end on the step's side, moved toward neutral until every point still makes
+  // a scenario there (a corner radius cannot exceed an obstruction's inradius); 0 when that
+  // leaves less than 1.5 steps: there is no larger step to take.
   double valid_far_step(const Candidate& c) const {
-    double far = far_step(c, *find_effect(c.effect));
-    for (int k = 0; k < 20 && far != 0 && !valid_everywhere(c.key, c.neutral + far); ++k) far *= 0.8;
-    return std::abs(far) >= 1.5 * std::abs(c.step) && valid_everywhere(c.key, c.neutral + far) ? far : 0.0;
+    const EffectDef& e = *find_effect(c.effect);
+    const std::optional<double> far = valid_offset(c.key, c.neutral, (c.step > 0 ? e.hi : e.lo) - c.neutral);
+    return far && std::abs(*far) >= 1.5 * std::abs(c.step) ? *far : 0.0;
+  }
+
+  // `offset` from `neutral`, shrunk toward it (x 0.8 a try, at most 20) until every point
+  // makes a scenario with key = neutral + offset; none if it never does.
+  std::optional<double> valid_offset(const std::string& key, double neutral, double offset) const {
+    for (int k = 0; k <= 20; ++k, offset *= 0.8)
+      if (valid_everywhere(key, neutral + offset)) return offset;
+    return std::nullopt;
   }
 
   // Move the candidates `which` by their steps at every baseline node (same seeds) and
@@ -309,8 +311,7 @@ class Loop {
       if (valid_everywhere(c.key, c.neutral + da)) offsets.push_back(da);
     // The fit may move the size only where every point still makes a scenario (a gap offset
     // below -W closes the gap): the range shrinks toward neutral until it does.
-    for (double* bound : {&term.lo, &term.hi})
-      for (int k = 0; k < 20 && !valid_everywhere(c.key, *bound); ++k) *bound = c.neutral + 0.8 * (*bound - c.neutral);
+    for (double* bound : {&term.lo, &term.hi}) *bound = c.neutral + valid_offset(c.key, c.neutral, *bound - c.neutral).value_or(0.0);
     std::vector<ParameterSet> sets;
     for (double da : offsets)
       for (const ParameterSet& n : base.nodes) sets.push_back(n.with(c.key, c.neutral + da));

@@ -13,14 +13,14 @@
 //   * the decomposition J = <s> / (<T_flow> + <T_clog>) (definitions at FlowDecomposition).
 //   * regime fractions and a label.
 #pragma once
-#include <string_view>
-#include <optional>
 
 #include "common/run_record.hpp"
 #include "common/statistics.hpp"
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
