@@ -139,6 +139,7 @@ Job make_job(const StudyDef& study, const SeriesDef& s, const std::string& scena
       job.id.scenario_hash = sc.scenario_hash;
       job.id.run_seed = sc.run_seed;
       job.expected_cost = expected_run_cost(sc, model);
+      job.time_limit_s = sc.def.run.time_limit_s;
     } catch (const ScenarioInvalid& e) {
       throw locate(e, loaded);
     }

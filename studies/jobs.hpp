@@ -38,6 +38,7 @@ struct Job {
   std::filesystem::path scenario;       // the series' scenario file
   std::vector<std::string> overrides;   // study set, series set, axis values, run.seed, run.replicate
   double expected_cost = 0;             // relative cost of the run (expected_run_cost); 0 = unknown
+  double time_limit_s = 0;              // s, the compiled scenario's run.time_limit_s (a screen's horizon)
 };
 
 // What a run is expected to cost, in 2D particle-seconds: particles x run.time_limit_s, times ~2.5 for the

@@ -271,8 +271,10 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
       "Final statistics: each survivor and each baseline gets {} **fresh** replicates (indices {} to {}); its J/J_0 "
       "and {:.0f} % interval use those runs only, never the runs that decided its fate, so the selection does not "
       "bias them (no correction needed). `*`: interval above 1; `**`: above 1 also at the Bonferroni level over the "
-      "survivors (a family-wise statement for the whole map). Runs that did not empty enter the race and the final "
-      "J with N / t_end, an upper bound. The generic tables above pool screening and confirmation runs: read this "
+      "survivors (a family-wise statement for the whole map). A run that did not empty (time limit, or stopped by "
+      "a clog for good) enters the race and the final J with its throughput over the horizon, passed / "
+      "run.time_limit_s: J is the discharge rate cut at the time limit, for cells and baselines alike. The generic "
+      "tables above pool screening and confirmation runs: read this "
       "section's numbers instead.",
       p.confirm, p.max, p.max + p.confirm - 1, 100 * p.confidence));
   write_decisions_csv(out_dir / "decisions.csv", in, state);

@@ -29,6 +29,15 @@ bool infeasible_placement(const ScenarioError& e) {
   return e.key() == "obstruction.distance_mm" || e.key() == "obstruction.lateral_offset_mm";
 }
 
+// The run is the one the study asks for now: a run stored before the study's settings changed
+// (another time limit, another model key) has the same cell and replicate but another job key,
+// and must not stand in for it. One scenario compile per stored run.
+bool is_current_run(const StudyDef& study, const ScreenCell& cell, ModelKind model, const StoredRun& r) {
+  const int rep = r.id.replicate;
+  return point_jobs(study, series_named(study, cell.series), cell.point, model, rep, rep + 1).front().id.key ==
+         r.id.key;
+}
+
 }  // namespace
 
 ScreenGrid screen_grid(const StudyDef& study) {
@@ -41,7 +50,9 @@ ScreenGrid screen_grid(const StudyDef& study) {
   for (std::size_t w = 0; w < gaps.values.size(); ++w) {
     ScreenCell b{none.label, static_cast<int>(w), "", "", 0, 0, axis_number(gaps, w) / d, static_cast<int>(w), true, ""};
     b.label = "W " + d_text(b.gap_d);
-    b.axes_json = point_jobs(study, none, b.point, g.model, 0, 1).front().id.axes_json;  // a bad baseline is an error
+    const Job first = point_jobs(study, none, b.point, g.model, 0, 1).front();  // a bad baseline is an error
+    b.axes_json = first.id.axes_json;
+    b.horizon_s = first.time_limit_s;
     g.baselines.push_back(b);
   }
   for (const SeriesDef& s : study.series) {
@@ -56,7 +67,9 @@ ScreenGrid screen_grid(const StudyDef& study) {
           c.label = fmt::format("{} size {}, D {}, W {}", s.label, d_text(c.size_d), d_text(c.distance_d),
                                 d_text(c.gap_d));
           try {
-            c.axes_json = point_jobs(study, s, point, g.model, 0, 1).front().id.axes_json;
+            const Job first = point_jobs(study, s, point, g.model, 0, 1).front();
+            c.axes_json = first.id.axes_json;
+            c.horizon_s = first.time_limit_s;
           } catch (const ScenarioError& e) {
             if (!infeasible_placement(e)) throw;
             c.feasible = false;
@@ -69,22 +82,33 @@ ScreenGrid screen_grid(const StudyDef& study) {
   return g;
 }
 
-double screen_j(const RunRecord& r, const std::string& j_kind) {
+double screen_j(const RunRecord& r, const std::string& j_kind, double horizon_s) {
   if (auto j = run_j(r, j_kind)) return *j;
-  return r.sim_time_s > 0 ? r.particles / r.sim_time_s : std::nan("");
+  if (!(horizon_s > 0)) throw std::logic_error("screen_j: a screen cell without a horizon");
+  return r.passed / horizon_s;
 }
 
 RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs) {
   const RacingParams& p = study.screen->racing;
   const auto slots = static_cast<std::size_t>(p.max + p.confirm);
   const std::string model = to_string(grid.model);
+  std::map<std::pair<std::string, std::string>, const ScreenCell*> by_axes;  // (series, axes) -> cell
+  for (const ScreenCell& c : grid.baselines) by_axes[{c.series, c.axes_json}] = &c;
+  for (int i : grid.raced) {
+    const ScreenCell& c = grid.cells[static_cast<std::size_t>(i)];
+    by_axes[{c.series, c.axes_json}] = &c;
+  }
   std::map<std::pair<std::string, std::string>, std::vector<double>> j;  // (series, axes) -> J by replicate
   for (const StoredRun& r : runs) {
     if (r.id.study != study.name || r.id.model != model || r.id.replicate < 0) continue;
-    auto& v = j[{r.id.series, r.id.axes_json}];
-    v.resize(slots, std::nan(""));
+    const auto found = by_axes.find({r.id.series, r.id.axes_json});
+    if (found == by_axes.end()) continue;  // a run of a cell the grid no longer has
+    const ScreenCell& cell = *found->second;
     const auto rep = static_cast<std::size_t>(r.id.replicate);
-    if (rep < slots) v[rep] = screen_j(r.record, study.report.j);
+    if (rep >= slots || !is_current_run(study, cell, grid.model, r)) continue;
+    auto& v = j[found->first];
+    v.resize(slots, std::nan(""));
+    v[rep] = screen_j(r.record, study.report.j, cell.horizon_s);
   }
   auto values = [&](const ScreenCell& c) {
     auto it = j.find({c.series, c.axes_json});

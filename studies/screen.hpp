@@ -28,6 +28,7 @@ struct ScreenCell {
   int gap = 0;                                   // index of its gap = its baseline
   bool feasible = true;
   std::string why_not;  // the scenario check that refused it (e.g. the obstruction overlaps a wall)
+  double horizon_s = 0;  // s, its runs' run.time_limit_s: a run that did not empty counts its passed / horizon
 };
 
 struct ScreenGrid {
@@ -42,10 +43,15 @@ struct ScreenGrid {
 // any other bad scenario throws ScenarioError like expand_jobs.
 ScreenGrid screen_grid(const StudyDef& study);
 
-// The J the race uses: J of the study's [report] j kind; a run where it is undefined (the
-// board did not empty) enters with N / t_end, an upper bound of its J_paper (such a run
-// can only look better than it is: conservative for dropping).
-double screen_j(const RunRecord& r, const std::string& j_kind);
+// The J the race uses: J of the study's [report] j kind when the run defines it; otherwise
+// (the board did not empty by the time limit, or a clog stopped it for good) the run's
+// throughput over the horizon, passed / horizon_s, where horizon_s is its run.time_limit_s.
+// For J_paper this is one quantity for every run, J_T = (spheres through by min(T, t_last)) /
+// min(T, t_last): the discharge rate, cut at the horizon T. A run stopped early for a permanent
+// clog counts as passing nothing more until T, which is what the no-flow stop asserts. The
+// cell and its baseline use the same T, so J_T / J_0,T compares like with like; at a gap where
+// everything clogs it measures how much passes before the clog (Zuriguel et al. 2011's effect).
+double screen_j(const RunRecord& r, const std::string& j_kind, double horizon_s);
 
 // J by replicate index for every raced cell and baseline, from the stored runs.
 RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs);

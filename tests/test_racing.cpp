@@ -21,6 +21,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 namespace gapflow {
@@ -351,6 +352,12 @@ TEST(ScreenStudy, BadKeysExitTwoWithLocation) {
 
 // A screen grid that gained a value renumbers its cells; runs stored before keep their old index.
 // The race must find a cell's runs by its axis values, not by that index.
+Job job_of(const StudyDef& study, const ScreenCell& cell, int replicate) {
+  for (const SeriesDef& s : study.series)
+    if (s.label == cell.series) return point_jobs(study, s, cell.point, ModelKind::box2d, replicate, replicate + 1).front();
+  throw std::logic_error("no series " + cell.series);
+}
+
 TEST(ScreenStudy, RaceFindsACellsRunsByAxisValuesNotByIndex) {
   const StudyDef study = load_study(source_path("studies/examples/tiny_screen.toml"));
   const ScreenGrid grid = screen_grid(study);
@@ -361,10 +368,52 @@ TEST(ScreenStudy, RaceFindsACellsRunsByAxisValuesNotByIndex) {
   StoredRun stale;  // the first cell's run, stored under the second cell's index
   stale.id.study = study.name, stale.id.series = first.series, stale.id.point = second.point;
   stale.id.axes_json = first.axes_json, stale.id.model = "2d", stale.id.replicate = 0;
+  stale.id.key = job_of(study, first, 0).id.key;
   stale.record.j_paper = 42.0;
   const RaceInput in = screen_race_input(study, grid, {stale});
   EXPECT_EQ(in.cells[0].j.at(0), 42.0);
   EXPECT_TRUE(std::isnan(in.cells[1].j.at(0)));
+}
+
+// A run stored before the study's settings changed (here: another time limit) has the cell's
+// axes and replicate but another job key: it must not stand in for the run the study asks for.
+TEST(ScreenStudy, RaceIgnoresRunsOfEarlierSettings) {
+  const StudyDef study = load_study(source_path("studies/examples/tiny_screen.toml"));
+  StudyDef changed = study;
+  changed.set.push_back({"run.time_limit_s=5", {study.file.string(), 0, 0}});
+  const ScreenGrid grid = screen_grid(study);
+  const ScreenCell& cell = grid.cells[static_cast<std::size_t>(grid.raced[0])];
+  StoredRun old_run;
+  old_run.id = job_of(changed, cell, 0).id;
+  old_run.record.j_paper = 42.0;
+  ASSERT_NE(old_run.id.key, job_of(study, cell, 0).id.key);
+  EXPECT_TRUE(std::isnan(screen_race_input(study, grid, {old_run}).cells[0].j.at(0)));
+  EXPECT_EQ(screen_race_input(changed, screen_grid(changed), {old_run}).cells[0].j.at(0), 42.0);
+}
+
+// A run that did not empty enters with passed / T (T = its run.time_limit_s), whether it hit the
+// limit or a clog stopped it early: a run through which nothing passed scores 0, never N / t_end
+// (which made a cell that let nothing through look faster than its baseline at a clogging gap).
+TEST(ScreenStudy, RunsThatDidNotEmptyEnterWithTheirThroughputOverTheHorizon) {
+  const StudyDef study = load_study(source_path("studies/examples/tiny_screen.toml"));
+  const ScreenGrid grid = screen_grid(study);
+  const ScreenCell& cell = grid.cells[static_cast<std::size_t>(grid.raced[0])];
+  ASSERT_DOUBLE_EQ(cell.horizon_s, 4.0);  // the study's run.time_limit_s
+  ASSERT_DOUBLE_EQ(grid.baselines.at(0).horizon_s, 4.0);
+  auto run = [&](int replicate, int passed, double t_end, EndReason end, std::optional<double> j_paper) {
+    StoredRun r;
+    r.id = job_of(study, cell, replicate).id;
+    r.record.particles = 60, r.record.passed = passed, r.record.sim_time_s = t_end, r.record.end_reason = end;
+    r.record.j_paper = j_paper;
+    return r;
+  };
+  const RaceInput in = screen_race_input(study, grid,
+                                         {run(0, 0, 1.5, EndReason::permanent_clog, std::nullopt),
+                                          run(1, 30, 4.0, EndReason::time_limit, std::nullopt),
+                                          run(2, 60, 3.0, EndReason::all_passed, 20.0)});
+  EXPECT_EQ(in.cells[0].j.at(0), 0.0);   // clogged for good with nothing through
+  EXPECT_EQ(in.cells[0].j.at(1), 7.5);   // 30 through by the 4 s horizon
+  EXPECT_EQ(in.cells[0].j.at(2), 20.0);  // emptied: its J_paper
 }
 
 }  // namespace
