@@ -134,6 +134,10 @@ int screen_dry_run_or_refuse(const StudyCommands::Options& o, const StudyDef& st
                            study.name, g.cells.size(), raced, gaps, race_rounds(p), p.initial, p.max, p.confirm,
                            (raced + gaps) * static_cast<std::size_t>(p.max + p.confirm),
                            (raced + gaps) * static_cast<std::size_t>(p.confirm));
+  if (const ScreenDef& s = *study.screen; s.check_model)
+    std::cout << fmt::format("then a check in {}: {} fresh replicates per cell above J_0, per control ({}) and per "
+                             "baseline of their gaps (the number of cells above J_0 is known only at the end)\n",
+                             to_string(*s.check_model), s.check_replicates, s.check_controls);
   return 0;
 }
 

@@ -6,6 +6,7 @@
 #include "common/text_file.hpp"
 #include "studies/report_snapshots.hpp"
 #include "studies/screen.hpp"
+#include "studies/screen_check.hpp"
 #include "studies/screen_heatmap.hpp"
 
 #include <fmt/format.h>
@@ -189,48 +190,212 @@ TextTable rounds_table(const RacingParams& p, const RaceState& s, std::size_t n_
   return t;
 }
 
+// The shapes of the grid, in grid order.
+std::vector<std::string> grid_shapes(const ScreenGrid& grid) {
+  std::vector<std::string> shapes;
+  for (const ScreenCell& c : grid.cells)
+    if (std::find(shapes.begin(), shapes.end(), c.series) == shapes.end()) shapes.push_back(c.series);
+  return shapes;
+}
+
+// One heat map over (D/d, size/d) of one shape at one gap; `fill` draws cell i of the grid.
+template <class Fill>
+HeatMap grid_map(const ScreenGrid& grid, const std::string& shape, const ScreenCell& gap, Fill&& fill) {
+  std::vector<double> xs, ys;
+  for (const ScreenCell& c : grid.cells)
+    if (c.series == shape) xs.push_back(c.distance_d), ys.push_back(c.size_d);
+  for (auto* v : {&xs, &ys}) {
+    std::sort(v->begin(), v->end());
+    v->erase(std::unique(v->begin(), v->end()), v->end());
+  }
+  HeatMap m;
+  m.ylabel = shape == "cylinder" ? "diameter/d" : "side/d";
+  for (double x : xs) m.xs.push_back(fmt::format("{:.3g}", x));
+  for (double y : ys) m.ys.push_back(fmt::format("{:.3g}", y));
+  for (std::size_t i = 0; i < grid.cells.size(); ++i) {
+    const ScreenCell& c = grid.cells[i];
+    if (c.series != shape || c.gap != gap.gap) continue;
+    HeatCell h = fill(i);
+    h.ix = static_cast<std::size_t>(std::lower_bound(xs.begin(), xs.end(), c.distance_d) - xs.begin());
+    h.iy = static_cast<std::size_t>(std::lower_bound(ys.begin(), ys.end(), c.size_d) - ys.begin());
+    m.cells.push_back(h);
+  }
+  return m;
+}
+
+std::string clog_text(double clogs_per_100) { return clogs_per_100 >= 0 ? fmt::format("{:.2g}", clogs_per_100) : ""; }
+
 // One heat map per shape and gap; the PNG file names.
 std::vector<std::string> draw_maps(const ScreenGrid& grid, const std::vector<CellResult>& cells,
                                    const RacingParams& p, const fs::path& out_dir) {
   std::vector<std::string> files;
-  std::vector<std::string> shapes;
-  for (const ScreenCell& c : grid.cells)
-    if (std::find(shapes.begin(), shapes.end(), c.series) == shapes.end()) shapes.push_back(c.series);
-  for (const std::string& shape : shapes)
+  for (const std::string& shape : grid_shapes(grid))
     for (const ScreenCell& gap : grid.baselines) {
-      std::vector<double> xs, ys;
-      for (const ScreenCell& c : grid.cells)
-        if (c.series == shape) xs.push_back(c.distance_d), ys.push_back(c.size_d);
-      for (auto* v : {&xs, &ys}) {
-        std::sort(v->begin(), v->end());
-        v->erase(std::unique(v->begin(), v->end()), v->end());
-      }
-      HeatMap m;
-      m.title = fmt::format("{}: J/J_0 at W = {} (confirmation runs)", shape, d_text(gap.gap_d));
-      m.ylabel = shape == "cylinder" ? "diameter/d" : "side/d";
-      for (double x : xs) m.xs.push_back(fmt::format("{:.3g}", x));
-      for (double y : ys) m.ys.push_back(fmt::format("{:.3g}", y));
-      m.legend = fmt::format("* interval above 1 ({:.0f} %), ** also Bonferroni over survivors, - below 1; <u rN: "
-                             "dropped after round N (upper bound u), n/f: does not fit, ?: not decided yet",
-                             100 * p.confidence);
-      for (const CellResult& c : cells) {
-        if (c.cell->series != shape || c.cell->gap != gap.gap) continue;
+      HeatMap m = grid_map(grid, shape, gap, [&](std::size_t i) {
+        const CellResult& c = cells[i];
         HeatCell h;
-        h.ix = static_cast<std::size_t>(std::lower_bound(xs.begin(), xs.end(), c.cell->distance_d) - xs.begin());
-        h.iy = static_cast<std::size_t>(std::lower_bound(ys.begin(), ys.end(), c.cell->size_d) - ys.begin());
         h.state = c.state;
         h.value = c.state == HeatCell::State::final ? c.final.ratio.ratio : c.last.ratio;
         if (c.state == HeatCell::State::final && !c.final.ratio.valid) h.state = HeatCell::State::missing;
         h.text = map_text(c);
         h.side_value = c.clogs_per_100;
-        h.side_text = c.clogs_per_100 >= 0 ? fmt::format("{:.2g}", c.clogs_per_100) : "";
-        m.cells.push_back(h);
-      }
+        h.side_text = clog_text(c.clogs_per_100);
+        return h;
+      });
+      m.title = fmt::format("{}: J/J_0 at W = {} (confirmation runs)", shape, d_text(gap.gap_d));
+      m.legend = fmt::format("* interval above 1 ({:.0f} %), ** also Bonferroni over survivors, - below 1; <u rN: "
+                             "dropped after round N (upper bound u), n/f: does not fit, ?: not decided yet",
+                             100 * p.confidence);
       const std::string file = fmt::format("screen_map_{}_W{:.3g}d.png", shape, gap.gap_d);
       draw_heatmap_png(m, out_dir / file);
       files.push_back(file);
     }
   return files;
+}
+
+// --- The other model's check (studies/screen_check.hpp) ---
+
+// above / at / below J_0, as a word: what the screen said of the cell, and what the check says.
+const char* screen_class(CheckRole r) {
+  return r == CheckRole::above ? "above" : r == CheckRole::control_at ? "not distinguishable" : "below";
+}
+const char* check_class(const CheckResult& r) {
+  return !r.check.valid ? "?" : r.above ? "above" : r.below ? "below" : "not distinguishable";
+}
+
+struct CheckedCell {
+  CheckResult result;
+  double clogs_per_100 = -1;  // on its check runs
+};
+
+std::vector<CheckedCell> checked_cells(const StudyDef& study, const ScreenGrid& grid, const std::vector<CheckPick>& picks,
+                                       const std::vector<StoredRun>& runs) {
+  const ScreenDef& s = *study.screen;
+  const int from = first_check_replicate(s.racing), to = from + s.check_replicates;
+  RunsByPoint by_point;
+  for (const StoredRun& r : runs)
+    if (r.id.model == to_string(*s.check_model)) by_point[{r.id.series, r.id.axes_json}].push_back(&r);
+  std::vector<CheckedCell> out;
+  for (const CheckResult& r : check_results(study, grid, picks, runs)) {
+    const ScreenCell& c = grid.cells[static_cast<std::size_t>(grid.raced[static_cast<std::size_t>(r.pick.raced)])];
+    const auto it = by_point.find({c.series, c.axes_json});
+    out.push_back({r, it != by_point.end() ? clog_rate(it->second, from, to) : -1});
+  }
+  return out;
+}
+
+TextTable check_table(const StudyDef& study, const ScreenGrid& grid, const std::vector<CheckedCell>& checked) {
+  const ScreenDef& s = *study.screen;
+  TextTable t;
+  t.title = fmt::format("Check in {}: the screen's cells above J_0 and the controls ({} fresh replicates each)",
+                        to_string(*s.check_model), s.check_replicates);
+  t.header = {"shape", "size/d", "D/d", "W/d", "picked as", fmt::format("J/J_0 {}", to_string(grid.model)),
+              fmt::format("J/J_0 {} [{:.0f} %]", to_string(*s.check_model), 100 * s.racing.confidence),
+              fmt::format("{} says", to_string(*s.check_model)), "agrees",
+              fmt::format("clogs per 100 passed ({})", to_string(*s.check_model))};
+  for (const CheckedCell& cc : checked) {
+    const CheckResult& r = cc.result;
+    const ScreenCell& c = grid.cells[static_cast<std::size_t>(grid.raced[static_cast<std::size_t>(r.pick.raced)])];
+    const bool agrees = std::string(screen_class(r.pick.role)) == check_class(r);
+    t.rows.push_back({c.series, fmt_num(c.size_d, 3), fmt_num(c.distance_d, 3), fmt_num(c.gap_d, 3),
+                      to_string(r.pick.role), fmt_num(r.pick.screen_ratio, 3),
+                      r.check.valid ? fmt::format("{:.3f} {}", r.check.ratio, fmt_ci(r.check.lo, r.check.hi, 3))
+                                    : "runs missing",
+                      check_class(r), r.check.valid ? (agrees ? "yes" : "no") : "",
+                      cc.clogs_per_100 >= 0 ? fmt_num(cc.clogs_per_100, 3) : "n/a"});
+  }
+  t.notes.push_back(
+      "The screen's J/J_0 is its final one (confirmation runs) for survivors and the one at the drop for dropped "
+      "cells. \"agrees\": the check puts the cell in the same class (above, not distinguishable from, below J_0) "
+      "as the screen.");
+  return t;
+}
+
+std::string check_summary(const StudyDef& study, const ScreenGrid& grid, const std::vector<CheckedCell>& checked) {
+  const ScreenDef& s = *study.screen;
+  int above = 0, held = 0, valid = 0, agree = 0;
+  std::vector<double> screen, check;
+  for (const CheckedCell& cc : checked) {
+    const CheckResult& r = cc.result;
+    above += r.pick.role == CheckRole::above ? 1 : 0;
+    if (!r.check.valid) continue;
+    ++valid;
+    held += r.pick.role == CheckRole::above && r.above ? 1 : 0;
+    agree += std::string(screen_class(r.pick.role)) == check_class(r) ? 1 : 0;
+    if (std::isfinite(r.pick.screen_ratio)) screen.push_back(r.pick.screen_ratio), check.push_back(r.check.ratio);
+  }
+  const double rho = screen.size() >= 3 ? spearman_correlation(screen, check) : std::nan("");
+  return fmt::format(
+      "**Check in {}** (cells picked from the stored {} runs once the confirmation was complete: every survivor "
+      "whose final interval lies above 1, and {} controls: the survivors closest to J/J_0 = 1, and cells shown below "
+      "J_0 spread over their range; each with its gap's baseline, {} fresh replicates at indices {} to {}, seeds "
+      "that neither the race nor the confirmation used). {} of {} checked cells have all their runs. The effect "
+      "holds (the {} interval lies above 1) in **{} of {}** cells the screen put above J_0; {} of {} checked cells "
+      "are in the same class in both models; rank correlation (Spearman) of J/J_0 between the models over the "
+      "checked cells: {}.",
+      to_string(*s.check_model), to_string(grid.model), s.check_controls, s.check_replicates,
+      first_check_replicate(s.racing), first_check_replicate(s.racing) + s.check_replicates - 1, valid,
+      checked.size(), to_string(*s.check_model), held, above, agree, valid,
+      std::isnan(rho) ? std::string("n/a (fewer than 3 cells)") : fmt::format("{:.2f} ({} cells)", rho, screen.size()));
+}
+
+// The check's heat maps: one per shape and gap with a checked cell; unchecked cells grey.
+std::vector<std::string> draw_check_maps(const StudyDef& study, const ScreenGrid& grid,
+                                         const std::vector<CheckedCell>& checked, const fs::path& out_dir) {
+  const ScreenDef& s = *study.screen;
+  std::map<std::size_t, const CheckedCell*> by_cell;  // grid cell index -> check
+  for (const CheckedCell& cc : checked)
+    by_cell[static_cast<std::size_t>(grid.raced[static_cast<std::size_t>(cc.result.pick.raced)])] = &cc;
+  std::vector<std::string> files;
+  for (const std::string& shape : grid_shapes(grid))
+    for (const ScreenCell& gap : grid.baselines) {
+      bool any = false;
+      for (const auto& [i, cc] : by_cell) any |= grid.cells[i].series == shape && grid.cells[i].gap == gap.gap;
+      if (!any) continue;
+      HeatMap m = grid_map(grid, shape, gap, [&](std::size_t i) {
+        HeatCell h;
+        h.state = grid.cells[i].feasible ? HeatCell::State::missing : HeatCell::State::infeasible;
+        const auto it = by_cell.find(i);
+        if (it == by_cell.end() || !it->second->result.check.valid) return h;
+        const CheckResult& r = it->second->result;
+        h.state = HeatCell::State::final;
+        h.value = r.check.ratio;
+        h.text = fmt::format("{:.2f}{}", r.check.ratio, r.above ? "*" : r.below ? " -" : "");
+        h.side_value = it->second->clogs_per_100;
+        h.side_text = clog_text(h.side_value);
+        return h;
+      });
+      m.title = fmt::format("{}: J/J_0 in {} at W = {} (check runs)", shape, to_string(*s.check_model),
+                            d_text(gap.gap_d));
+      m.legend = fmt::format("* interval above 1 ({:.0f} %), - below 1; grey: not checked, n/f: does not fit",
+                             100 * s.racing.confidence);
+      const std::string file = fmt::format("screen_check_{}_{}_W{:.3g}d.png", to_string(*s.check_model), shape,
+                                           gap.gap_d);
+      draw_heatmap_png(m, out_dir / file);
+      files.push_back(file);
+    }
+  return files;
+}
+
+void add_check(ExperimentSection& sec, const StudyDef& study, const ScreenGrid& grid, const RaceInput& in,
+               const RaceState& state, const std::vector<StoredRun>& runs, const fs::path& out_dir, bool plots) {
+  const ScreenDef& s = *study.screen;
+  const auto picks = check_picks(s.racing, in, state, s.check_controls);
+  if (!picks) {
+    sec.paragraphs.push_back(fmt::format("**Check in {}**: not started (the screen's confirmation is not complete).",
+                                         to_string(*s.check_model)));
+    return;
+  }
+  const std::vector<CheckedCell> checked = checked_cells(study, grid, *picks, runs);
+  sec.paragraphs.push_back(check_summary(study, grid, checked));
+  sec.tables.push_back(check_table(study, grid, checked));
+  if (!plots) return;
+  std::string list;
+  for (const std::string& f : draw_check_maps(study, grid, checked, out_dir)) list += fmt::format("![{}]({})\n", f, f);
+  if (!list.empty())
+    sec.paragraphs.push_back(fmt::format("Check heat maps ({}; left J/J_0, right clogs per 100 passed):\n\n",
+                                         to_string(*s.check_model)) +
+                             list);
 }
 
 }  // namespace
@@ -286,6 +451,7 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
     for (const std::string& f : draw_maps(grid, cells, study.screen->racing, out_dir)) list += fmt::format("![{}]({})\n", f, f);
     s.paragraphs.push_back("Heat maps (left J/J_0, right clogs per 100 particles passed):\n\n" + list);
   }
+  if (study.screen->check_model) add_check(s, study, grid, in, state, runs, out_dir, plots);
   return s;
 }
 

@@ -1,6 +1,7 @@
 #include "studies/screen.hpp"
 
 #include "studies/confirm.hpp"
+#include "studies/screen_check.hpp"
 
 #include <fmt/format.h>
 
@@ -29,15 +30,6 @@ bool infeasible_placement(const ScenarioError& e) {
   return e.key() == "obstruction.distance_mm" || e.key() == "obstruction.lateral_offset_mm";
 }
 
-// The run is the one the study asks for now: a run stored before the study's settings changed
-// (another time limit, another model key) has the same cell and replicate but another job key,
-// and must not stand in for it. One scenario compile per stored run.
-bool is_current_run(const StudyDef& study, const ScreenCell& cell, ModelKind model, const StoredRun& r) {
-  const int rep = r.id.replicate;
-  return point_jobs(study, series_named(study, cell.series), cell.point, model, rep, rep + 1).front().id.key ==
-         r.id.key;
-}
-
 }  // namespace
 
 ScreenGrid screen_grid(const StudyDef& study) {
@@ -50,9 +42,7 @@ ScreenGrid screen_grid(const StudyDef& study) {
   for (std::size_t w = 0; w < gaps.values.size(); ++w) {
     ScreenCell b{none.label, static_cast<int>(w), "", "", 0, 0, axis_number(gaps, w) / d, static_cast<int>(w), true, ""};
     b.label = "W " + d_text(b.gap_d);
-    const Job first = point_jobs(study, none, b.point, g.model, 0, 1).front();  // a bad baseline is an error
-    b.axes_json = first.id.axes_json;
-    b.horizon_s = first.time_limit_s;
+    b.axes_json = point_jobs(study, none, b.point, g.model, 0, 1).front().id.axes_json;  // a bad baseline is an error
     g.baselines.push_back(b);
   }
   for (const SeriesDef& s : study.series) {
@@ -67,9 +57,7 @@ ScreenGrid screen_grid(const StudyDef& study) {
           c.label = fmt::format("{} size {}, D {}, W {}", s.label, d_text(c.size_d), d_text(c.distance_d),
                                 d_text(c.gap_d));
           try {
-            const Job first = point_jobs(study, s, point, g.model, 0, 1).front();
-            c.axes_json = first.id.axes_json;
-            c.horizon_s = first.time_limit_s;
+            c.axes_json = point_jobs(study, s, point, g.model, 0, 1).front().id.axes_json;
           } catch (const ScenarioError& e) {
             if (!infeasible_placement(e)) throw;
             c.feasible = false;
@@ -82,46 +70,61 @@ ScreenGrid screen_grid(const StudyDef& study) {
   return g;
 }
 
+std::vector<Job> screen_cell_jobs(const StudyDef& study, const ScreenCell& cell, ModelKind model, int from, int to) {
+  return point_jobs(study, series_named(study, cell.series), cell.point, model, from, to);
+}
+
 double screen_j(const RunRecord& r, const std::string& j_kind, double horizon_s) {
   if (auto j = run_j(r, j_kind)) return *j;
-  if (!(horizon_s > 0)) throw std::logic_error("screen_j: a screen cell without a horizon");
+  if (!(horizon_s > 0)) throw std::logic_error("screen_j: a run without a time limit");
   return r.passed / horizon_s;
 }
 
-RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs) {
-  const RacingParams& p = study.screen->racing;
-  const auto slots = static_cast<std::size_t>(p.max + p.confirm);
-  const std::string model = to_string(grid.model);
+ScreenJ screen_j_by_replicate(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs,
+                              ModelKind model, std::size_t slots) {
   std::map<std::pair<std::string, std::string>, const ScreenCell*> by_axes;  // (series, axes) -> cell
   for (const ScreenCell& c : grid.baselines) by_axes[{c.series, c.axes_json}] = &c;
   for (int i : grid.raced) {
     const ScreenCell& c = grid.cells[static_cast<std::size_t>(i)];
     by_axes[{c.series, c.axes_json}] = &c;
   }
-  std::map<std::pair<std::string, std::string>, std::vector<double>> j;  // (series, axes) -> J by replicate
+  ScreenJ j;
   for (const StoredRun& r : runs) {
-    if (r.id.study != study.name || r.id.model != model || r.id.replicate < 0) continue;
+    if (r.id.study != study.name || r.id.model != to_string(model) || r.id.replicate < 0) continue;
     const auto found = by_axes.find({r.id.series, r.id.axes_json});
     if (found == by_axes.end()) continue;  // a run of a cell the grid no longer has
-    const ScreenCell& cell = *found->second;
     const auto rep = static_cast<std::size_t>(r.id.replicate);
-    if (rep >= slots || !is_current_run(study, cell, grid.model, r)) continue;
+    if (rep >= slots) continue;
+    // The run the study asks for now: a run stored before the study's settings changed (another
+    // time limit, another model key) has the same cell and replicate but another job key, and must
+    // not stand in for it. One scenario compile per stored run.
+    const ScreenCell& cell = *found->second;
+    const Job wanted = screen_cell_jobs(study, cell, model, r.id.replicate, r.id.replicate + 1).front();
+    if (wanted.id.key != r.id.key) continue;
     auto& v = j[found->first];
     v.resize(slots, std::nan(""));
-    v[rep] = screen_j(r.record, study.report.j, cell.horizon_s);
+    v[rep] = screen_j(r.record, study.report.j, wanted.time_limit_s);
   }
-  auto values = [&](const ScreenCell& c) {
-    auto it = j.find({c.series, c.axes_json});
-    return it != j.end() ? it->second : std::vector<double>(slots, std::nan(""));
-  };
+  return j;
+}
+
+std::vector<double> screen_j_of(const ScreenJ& j, const ScreenCell& c, std::size_t slots) {
+  auto it = j.find({c.series, c.axes_json});
+  return it != j.end() ? it->second : std::vector<double>(slots, std::nan(""));
+}
+
+RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs) {
+  const RacingParams& p = study.screen->racing;
+  const auto slots = static_cast<std::size_t>(p.max + p.confirm);
+  const ScreenJ j = screen_j_by_replicate(study, grid, runs, grid.model, slots);
   RaceInput in;
   for (const ScreenCell& b : grid.baselines) {
     in.baseline_names.push_back(b.label);
-    in.baselines.push_back(values(b));
+    in.baselines.push_back(screen_j_of(j, b, slots));
   }
   for (int i : grid.raced) {
     const ScreenCell& c = grid.cells[static_cast<std::size_t>(i)];
-    in.cells.push_back({c.label, c.gap, values(c)});
+    in.cells.push_back({c.label, c.gap, screen_j_of(j, c, slots)});
   }
   return in;
 }
@@ -133,8 +136,7 @@ std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid,
   const int to = confirming ? p.max + p.confirm : replicates_after_round(p, state.rounds_decided);
   std::vector<Job> out;
   auto add = [&](const ScreenCell& c) {
-    for (Job& job : point_jobs(study, series_named(study, c.series), c.point, grid.model, from, to))
-      out.push_back(std::move(job));
+    for (Job& job : screen_cell_jobs(study, c, grid.model, from, to)) out.push_back(std::move(job));
   };
   bool any_alive = false;
   for (std::size_t k = 0; k < grid.raced.size(); ++k)
@@ -173,6 +175,26 @@ void add_summary(RunnerSummary& total, const RunnerSummary& step, const std::vec
   total.cancelled = step.cancelled;
 }
 
+// The other model's check of the finished screen (studies/screen_check.hpp).
+RunnerSummary run_check(const StudyDef& study, const ScreenGrid& grid, Store& store, const RunnerOptions& options,
+                        const JobRunner& run, std::ostream& log, RunnerSummary total,
+                        const std::set<std::string>& stored_before, std::set<std::string>& listed) {
+  const ScreenDef& s = *study.screen;
+  const RaceInput in = screen_race_input(study, grid, store.load(study.name));
+  const auto picks = check_picks(s.racing, in, replay_race(s.racing, in), s.check_controls);
+  if (!picks) throw std::logic_error("the screen's confirmation is stored but its picks are not decided");
+  std::size_t above = 0;
+  for (const CheckPick& p : *picks) above += p.role == CheckRole::above ? 1 : 0;
+  const std::vector<Job> jobs = check_jobs(study, grid, *picks);
+  log << fmt::format("screen check in {}: {} cells above J_0 and {} controls, {} fresh replicates each and per "
+                     "baseline (replicates {} to {}): {} jobs\n",
+                     to_string(*s.check_model), above, picks->size() - above, s.check_replicates,
+                     first_check_replicate(s.racing), first_check_replicate(s.racing) + s.check_replicates - 1,
+                     jobs.size());
+  add_summary(total, run(jobs, store, options), jobs, stored_before, listed);
+  return total;
+}
+
 }  // namespace
 
 RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOptions& options, const JobRunner& run,
@@ -197,7 +219,10 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
                          p.max + p.confirm - 1);
     const RunnerSummary step = run(jobs, store, options);
     add_summary(total, step, jobs, stored_before, listed);
-    if (step.cancelled || !step.failed.empty() || confirming) return total;
+    if (step.cancelled || !step.failed.empty()) return total;
+    if (confirming) return study.screen->check_model ? run_check(study, grid, store, options, run, log, total,
+                                                                 stored_before, listed)
+                                                     : total;
   }
   throw std::runtime_error("the screen made no progress: a round's runs are stored but the race cannot decide it");
 }

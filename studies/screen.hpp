@@ -12,6 +12,7 @@
 #include "studies/study.hpp"
 
 #include <iosfwd>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,6 @@ struct ScreenCell {
   int gap = 0;                                   // index of its gap = its baseline
   bool feasible = true;
   std::string why_not;  // the scenario check that refused it (e.g. the obstruction overlaps a wall)
-  double horizon_s = 0;  // s, its runs' run.time_limit_s: a run that did not empty counts its passed / horizon
 };
 
 struct ScreenGrid {
@@ -43,6 +43,9 @@ struct ScreenGrid {
 // any other bad scenario throws ScenarioError like expand_jobs.
 ScreenGrid screen_grid(const StudyDef& study);
 
+// The jobs of one cell's (or baseline's) replicates [from, to) with `model`.
+std::vector<Job> screen_cell_jobs(const StudyDef& study, const ScreenCell& cell, ModelKind model, int from, int to);
+
 // The J the race uses: J of the study's [report] j kind when the run defines it; otherwise
 // (the board did not empty by the time limit, or a clog stopped it for good) the run's
 // throughput over the horizon, passed / horizon_s, where horizon_s is its run.time_limit_s.
@@ -53,7 +56,15 @@ ScreenGrid screen_grid(const StudyDef& study);
 // everything clogs it measures how much passes before the clog (Zuriguel et al. 2011's effect).
 double screen_j(const RunRecord& r, const std::string& j_kind, double horizon_s);
 
-// J by replicate index for every raced cell and baseline, from the stored runs.
+// J by replicate index (NaN = not stored) for each cell and baseline, keyed by (series, axes_json),
+// from the stored runs of `model` whose job key is the one the study asks for now (a run stored
+// under earlier settings is ignored); replicates >= slots are ignored.
+using ScreenJ = std::map<std::pair<std::string, std::string>, std::vector<double>>;
+ScreenJ screen_j_by_replicate(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs,
+                              ModelKind model, std::size_t slots);
+std::vector<double> screen_j_of(const ScreenJ& j, const ScreenCell& c, std::size_t slots);
+
+// J by replicate index for every raced cell and baseline, from the stored runs of the screen's model.
 RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs);
 
 // The jobs the race needs next: the missing replicates of the next round (alive cells and

@@ -16,9 +16,13 @@
 //   reference = "nearest"                   # D to the nearest point (default) or "centre"
 //   initial = 3, step = 3, max = 12, confirm = 10      # replicates (studies/racing.hpp)
 //   alpha = 0.05, scope = "cell", drop_below = 1.0, best_margin = 0.1, confidence = 0.95
+//   check_model = "3d", check_replicates = 10, check_controls = 2   # the other model's check (screen_check.hpp)
 #pragma once
 
+#include "models/registry.hpp"
 #include "studies/racing.hpp"
+
+#include <optional>
 
 #include <filesystem>
 #include <string>
@@ -33,6 +37,9 @@ struct ScreenDef {
   std::string reference = "nearest";  // obstruction.reference of every cell
   double d_mm = 0;                    // mm, nominal d of the base scenario with the study's set
   RacingParams racing;
+  std::optional<ModelKind> check_model;  // the model that checks the screen's result (absent: no check)
+  int check_replicates = 10;             // runs: fresh replicates per checked cell and per baseline of its gap
+  int check_controls = 2;                // cells: not above J_0 in the screen, checked alongside as controls
 };
 
 // The series label of the baseline and the size key of a shape.

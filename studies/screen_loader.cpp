@@ -17,7 +17,7 @@ namespace {
 const std::vector<std::string> kScreenKeys{
     "scenario", "shapes",     "cylinder_diameter_d", "cylinder_diameter_mm", "triangle_side_d", "triangle_side_mm",
     "distance_d", "distance_mm", "gap_d", "gap_mm",  "reference", "initial", "step", "max", "confirm", "alpha",
-    "drop_below", "best_margin", "confidence", "scope"};
+    "drop_below", "best_margin", "confidence", "scope", "check_model", "check_replicates", "check_controls"};
 const std::vector<std::string> kScreenShapes{"cylinder", "A", "V"};
 
 // One grid axis as written: its values (in the unit of the key that gave them) and where.
@@ -99,6 +99,23 @@ void read_racing(StrictTable& t, RacingParams& r) {
   r.family = t.choice("scope", {"cell", "family"}).value_or("cell") == "family";
 }
 
+// The other model's check of the screen's picks: check_model must differ from the screen's.
+void read_check(StrictTable& t, ModelKind screen_model, ScreenDef& s) {
+  const bool any = t.get("check_replicates") || t.get("check_controls");
+  if (auto m = t.choice("check_model", {"2d", "3d"})) {
+    s.check_model = parse_model_kind(*m);
+    if (*s.check_model == screen_model)
+      t.fail("check_model", *t.get("check_model"),
+             "must be the other model than the screen's (study.models): the check confirms the screen's cells "
+             "with a model that did not pick them");
+  } else if (any) {
+    const char* key = t.get("check_replicates") ? "check_replicates" : "check_controls";
+    t.fail(key, *t.get(key), "needs check_model (\"2d\" or \"3d\"): without it the screen checks nothing");
+  }
+  if (auto v = t.integer("check_replicates", 2, kMaxReplicates)) s.check_replicates = static_cast<int>(*v);
+  if (auto v = t.integer("check_controls", 0, 100)) s.check_controls = static_cast<int>(*v);
+}
+
 }  // namespace
 
 const char* screen_size_key(const std::string& shape) {
@@ -142,6 +159,7 @@ void read_screen(const toml::table& root, const toml::table& screen, const std::
   const LengthList gap = read_lengths(t, "gap", true, true, "the gaps W");
   s.reference = t.choice("reference", {"nearest", "centre"}).value_or("nearest");
   read_racing(t, s.racing);
+  read_check(t, study.models.front(), s);
   s.d_mm = base_diameter_mm(s.scenario, scenario_where, study);
 
   std::vector<double> ignored;
@@ -161,9 +179,10 @@ void read_screen(const toml::table& root, const toml::table& screen, const std::
   }
   SeriesDef none{kScreenBaseline, s.scenario, scenario_where, {{"obstruction.shape=none", scenario_where}}, {w_axis}};
   study.series.push_back(std::move(none));
-  const double most = (cells + static_cast<double>(gap.values.size())) * (s.racing.max + s.racing.confirm);
+  const double most = (cells + static_cast<double>(gap.values.size())) *
+                      (s.racing.max + s.racing.confirm + (s.check_model ? s.check_replicates : 0));
   if (most > static_cast<double>(kMaxStudyJobs))
-    t.missing("max", fmt::format("the screen may need {:.6g} runs ((cells + gaps) x (max + confirm)); at most {} "
+    t.missing("max", fmt::format("the screen may need {:.6g} runs ((cells + gaps) x (max + confirm + check_replicates)); at most {} "
                                  "are allowed: split it",
                                  most, kMaxStudyJobs));
   study.report.baseline = kScreenBaseline;

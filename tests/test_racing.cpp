@@ -10,6 +10,7 @@
 
 #include "common/simulation.hpp"
 #include "studies/screen.hpp"
+#include "studies/screen_check.hpp"
 
 #include "common/random.hpp"
 #include "test_support.hpp"
@@ -252,6 +253,10 @@ TEST(ScreenStudy, TinyMapRunsDecidesResumesAndReports) {
   EXPECT_EQ(csv.rfind("round,cell,n,ratio,lower,upper,best_lower,decision\n", 0), 0u) << csv;
   EXPECT_NE(csv.find("\n1,\"cylinder size 2 d, D 1 d, W 4 d\",2,"), std::string::npos) << csv;
   EXPECT_TRUE(std::filesystem::exists(dir / "report" / "screen_map_cylinder_W4d.png")) << md;
+  // The 3D check ran after the confirmation, and the report says what it found.
+  EXPECT_NE(run.output.find("screen check in 3d"), std::string::npos) << run.output;
+  EXPECT_NE(md.find("**Check in 3d**"), std::string::npos) << md;
+  EXPECT_NE(md.find("| control: at J_0 |"), std::string::npos) << md;
   // One worker instead of two, another store: the same decisions (they never depend on timing).
   const std::string db1 = shell_quoted((dir / "s1.sqlite").string()), out1 = shell_quoted((dir / "r1").string());
   ASSERT_EQ(run_gapflow("study " + study + " --db " + db1 + " --jobs 1", 300).code, 0);
@@ -348,6 +353,41 @@ TEST(ScreenStudy, BadKeysExitTwoWithLocation) {
              "screen.cylinder_diameter_d");
   expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid,
              "4:1", "series", "[[series]]\nlabel = \"x\"\nscenario = \"x.toml\"\n");
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "check_model = \"2d\"\n", "10:15",
+             "screen.check_model");  // the screen's own model checks nothing
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "check_replicates = 4\n", "10:20",
+             "screen.check_replicates");  // without check_model
+}
+
+// The check's picks on synthetic data (no simulation): every survivor above J_0, then the
+// controls: survivors closest to J/J_0 = 1, and the median of the cells shown below.
+TEST(ScreenCheck, PicksCellsAboveAndControlsAtAndBelow) {
+  RacingParams p;
+  p.initial = 2, p.step = 1, p.max = 2, p.confirm = 3;  // one round on replicates 0-1, confirmation on 2-4
+  auto cell = [](double mean) { return std::vector<double>{mean - 1, mean + 1, mean - 1, mean, mean + 1}; };
+  RaceInput in;
+  in.baseline_names = {"W"};
+  in.baselines = {cell(100)};
+  for (double mean : {130.0, 101.0, 60.0, 99.0, 70.0, 96.0, 80.0}) in.cells.push_back({"c", 0, cell(mean)});
+  const RaceState state = replay_race(p, in);
+  ASSERT_TRUE(state.screening_done(p));
+  for (int dropped : {2, 4, 6}) EXPECT_FALSE(state.alive(dropped)) << dropped;
+  const auto picks = check_picks(p, in, state, 3);
+  ASSERT_TRUE(picks.has_value());
+  ASSERT_EQ(picks->size(), 4u);
+  EXPECT_EQ((*picks)[0].raced, 0);  // 1.30: above
+  EXPECT_EQ((*picks)[0].role, CheckRole::above);
+  EXPECT_EQ((*picks)[1].raced, 1);  // 1.01 and 0.99: the two closest to 1, in cell order
+  EXPECT_EQ((*picks)[2].raced, 3);
+  EXPECT_EQ((*picks)[2].role, CheckRole::control_at);
+  // Below: 0.6, 0.7, 0.8 (dropped) and 0.96 (survived, below on its confirmation): the median (upper middle).
+  EXPECT_TRUE(state.alive(5));
+  EXPECT_EQ((*picks)[3].raced, 6);
+  EXPECT_EQ((*picks)[3].role, CheckRole::control_below);
+  // Before the confirmation is complete there is nothing to pick.
+  RaceInput partial = in;
+  partial.cells[1].j[4] = std::nan("");
+  EXPECT_FALSE(check_picks(p, partial, replay_race(p, partial), 3).has_value());
 }
 
 // A screen grid that gained a value renumbers its cells; runs stored before keep their old index.
@@ -398,8 +438,7 @@ TEST(ScreenStudy, RunsThatDidNotEmptyEnterWithTheirThroughputOverTheHorizon) {
   const StudyDef study = load_study(source_path("studies/examples/tiny_screen.toml"));
   const ScreenGrid grid = screen_grid(study);
   const ScreenCell& cell = grid.cells[static_cast<std::size_t>(grid.raced[0])];
-  ASSERT_DOUBLE_EQ(cell.horizon_s, 4.0);  // the study's run.time_limit_s
-  ASSERT_DOUBLE_EQ(grid.baselines.at(0).horizon_s, 4.0);
+  ASSERT_DOUBLE_EQ(job_of(study, cell, 0).time_limit_s, 4.0);  // the study's run.time_limit_s
   auto run = [&](int replicate, int passed, double t_end, EndReason end, std::optional<double> j_paper) {
     StoredRun r;
     r.id = job_of(study, cell, replicate).id;
