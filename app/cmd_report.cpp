@@ -17,6 +17,7 @@ struct ReportCommand::Options {
   std::string results, study, out;
   bool no_plots = false;
   bool no_snapshots = false;
+  bool quick = false;
   bool pairing = false;
   std::string compare;
   std::string j;
@@ -32,6 +33,7 @@ int cmd_report(const ReportCommand::Options& o) {
   if (!o.out.empty()) r.out = o.out;
   r.plots = !o.no_plots;
   r.snapshots = !o.no_snapshots;
+  r.quick = o.quick;
   if (!o.compare.empty()) {
     const std::size_t eq = o.compare.find('=');
     const std::string model = o.compare.substr(0, eq);
@@ -74,6 +76,9 @@ ReportCommand::ReportCommand(CLI::App& app) : o_(std::make_unique<Options>()) {
       ->check(CLI::IsMember(jkind_option_names()));
   o.cmd->add_flag("--no-snapshots", o.no_snapshots,
                   "Do not re-simulate one stored run per point class for the report's top-view snapshots");
+  o.cmd->add_flag("--quick", o.quick,
+                  "The store holds the study's --quick variant: a screen's thinned grid, the snapshots' jobs "
+                  "(the study file must have a [quick] table)");
 }
 
 ReportCommand::~ReportCommand() = default;

@@ -331,6 +331,7 @@ struct ReportRequest {
   std::optional<std::filesystem::path> out;    // default: the store's folder
   bool plots = true;
   bool snapshots = true;  // one re-simulated top view per point class (studies/report_snapshots.hpp)
+  bool quick = false;     // the store holds the study's --quick variant (a screen's grid is thinned)
   // --compare MODEL=STORE: that model's runs from another store (of one study, with the same
   // series and point grid) join the report as if run here, e.g. the 3D runs a 2D-only re-run is
   // compared with; the store given first must hold none of that model.

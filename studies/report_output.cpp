@@ -131,6 +131,7 @@ std::string regenerate_command(const ReportRequest& r) {
   if (r.out) c += " --out " + shell_quote(r.out->string());
   if (!r.plots) c += " --no-plots";
   if (!r.snapshots) c += " --no-snapshots";
+  if (r.quick) c += " --quick";
   if (r.compare) c += " --compare " + shell_quote(r.compare->model + "=" + r.compare->results.string());
   if (r.j) c += std::string(" --j ") + option_name(*r.j);
   return c;
@@ -273,7 +274,7 @@ std::string report_snapshots(const ReportRequest& request, const fs::path& db, c
   if (picks.empty()) return snapshots_markdown({}, "");
   std::vector<Snapshot> shots;
   try {
-    const StudyDef study = study_for_snapshots(db, request.study, data.study.name);
+    const StudyDef study = study_for_snapshots(db, request.study, data.study.name, request.quick);
     shots = draw_snapshots(picks, study, runs, o.out_dir, log);
   } catch (const std::exception& e) {  // e.g. the recorded study file's scenario paths do not resolve from here
     o.snapshot_warning = fmt::format("the study's jobs could not be rebuilt: {}", e.what());

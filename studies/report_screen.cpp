@@ -460,7 +460,7 @@ ExperimentSection screen_report_section(const ReportRequest& request, const fs::
                                         std::ostream& log) {
   try {
     const std::string name = runs.empty() ? std::string() : runs.front().id.study;
-    const StudyDef study = study_for_snapshots(db, request.study, name);
+    const StudyDef study = study_for_snapshots(db, request.study, name, request.quick);
     if (study.screen) return screen_section(study, runs, out_dir, request.plots);
     throw std::invalid_argument("the study file has no [screen] table");
   } catch (const std::exception& e) {

@@ -224,11 +224,20 @@ std::vector<SnapshotPick> choose_snapshots(const ReportData& data, const std::ve
   return out;
 }
 
-StudyDef study_for_snapshots(const fs::path& db, const std::optional<fs::path>& file, const std::string& study_name) {
-  if (file) return load_study(*file);
+StudyDef study_for_snapshots(const fs::path& db, const std::optional<fs::path>& file, const std::string& study_name,
+                             bool quick) {
+  auto variant = [&](StudyDef study) {
+    if (!quick) return study;
+    if (!study.quick.present)
+      throw std::invalid_argument("--quick: the study file " + study.file.string() + " has no [quick] table");
+    StudyDef q = apply_quick(std::move(study));
+    q.quick = {};  // applied: jobs_by_key must not thin it again
+    return q;
+  };
+  if (file) return variant(load_study(*file));
   for (const StudyFileRecord& f : Store(db).study_files())
     if (f.study == study_name || study_name.empty())
-      return parse_study(f.text, f.source, fs::path(f.source).parent_path());
+      return variant(parse_study(f.text, f.source, fs::path(f.source).parent_path()));
   throw std::invalid_argument("no study file given (--study) and none recorded in the store");
 }
 

@@ -55,9 +55,10 @@ struct Snapshot {
 };
 
 // The study file the runs were made from: `file` when given, else the copy recorded in the
-// store (its scenario paths are relative to where it was read from). Throws when neither works.
+// store (its scenario paths are relative to where it was read from); with `quick`, its --quick
+// variant (apply_quick, its [quick] table then spent). Throws when neither works.
 StudyDef study_for_snapshots(const std::filesystem::path& db, const std::optional<std::filesystem::path>& file,
-                             const std::string& study_name);
+                             const std::string& study_name, bool quick = false);
 
 // Re-run each pick's job (found by its stored key among the study's jobs, [quick] and
 // [confirm] ones included) up to its moment and write the picture into `dir`. A pick

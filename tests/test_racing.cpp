@@ -264,6 +264,30 @@ TEST(ScreenStudy, TinyMapRunsDecidesResumesAndReports) {
   EXPECT_EQ(read_all(dir / "r1" / "decisions.csv"), csv);
 }
 
+// A --quick screen runs a thinned grid; `report --quick` rebuilds that grid and decides it, while
+// a report of the full grid finds its round 1 incomplete.
+TEST(ScreenStudy, QuickScreenIsReportedOnItsThinnedGrid) {
+  TempDir dir("screen-quick");
+  const std::string study = shell_quoted(source_path("studies/examples/tiny_screen.toml").string());
+  const std::string db = shell_quoted((dir / "q.sqlite").string());
+  const auto run = run_gapflow("study " + study + " --quick --db " + db + " --jobs 2", 300);
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_NE(run.output.find("4 cells"), std::string::npos) << run.output;
+  const auto rep = run_gapflow("report " + db + " --quick --out " + shell_quoted((dir / "q").string()) +
+                                   " --no-snapshots --no-plots",
+                               120);
+  ASSERT_EQ(rep.code, 0) << rep.output;
+  const std::string md = read_all(dir / "q" / "report.md");
+  EXPECT_EQ(md.find("**Incomplete**"), std::string::npos) << md;
+  EXPECT_NE(md.find("**Check in 3d**"), std::string::npos) << md;
+  EXPECT_NE(md.find("--quick"), std::string::npos) << "the regenerate command keeps --quick";
+  const auto full = run_gapflow("report " + db + " --out " + shell_quoted((dir / "f").string()) +
+                                    " --no-snapshots --no-plots",
+                                120);
+  ASSERT_EQ(full.code, 0) << full.output;
+  EXPECT_NE(read_all(dir / "f" / "report.md").find("**Incomplete**"), std::string::npos);
+}
+
 // The driver without simulation: each job returns J = (1 - 0.1 x point) x 100 + noise seeded by
 // its key. Interrupted after 9 runs (mid-round 1), then resumed: the same decisions and runs as
 // a screen run in one go.
