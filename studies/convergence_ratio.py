@@ -12,21 +12,16 @@ absolute J_0 against its reference, for comparison (how much of the step error t
 and a first-order fit R(dt) = R(0) (1 + b dt) over all steps.
 
 Runs that did not empty have no J_paper; their count is printed, never silently dropped.
-Reads only the store; writes to stdout. Debian's /usr/bin/python3 with python3-scipy, python3-numpy.
+Reads only the store; writes to stdout. Debian's /usr/bin/python3 with python3-scipy (t quantile).
 """
 import argparse
-import json
 import math
+import pathlib
 import sqlite3
 import statistics
 import sys
 
-import numpy
-import scipy.stats
-
-
-def t975(df):
-    return float(scipy.stats.t.ppf(0.975, df)) if df > 0 else float("inf")
+from convergence_table import t975, verdict, weighted_line  # as in the step tables
 
 
 def mean_var(xs):
@@ -40,24 +35,23 @@ def ratio(a, b):
     mb, vb = mean_var(b)
     r = ma / mb
     ea, eb = va / mb**2, r**2 * vb / mb**2  # the two terms of se^2
-    df = (ea + eb) ** 2 / (ea**2 / (len(a) - 1) + eb**2 / (len(b) - 1))
+    den = ea**2 / (len(a) - 1) + eb**2 / (len(b) - 1)
+    df = (ea + eb) ** 2 / den if den > 0 else float("inf")
     return r, math.sqrt(ea + eb), df
 
 
-def verdict(diff, half, tol):
-    if abs(diff) + half <= tol:
-        return "converged"
-    if abs(diff) - half > tol:
-        return "diverged"
-    return "within" if abs(diff) <= tol else "outside"
-
-
 def load(store, model):
-    con = sqlite3.connect(f"file:{store}?mode=ro", uri=True)
-    rows = con.execute("SELECT series, axes_json, j_paper FROM runs WHERE model = ?", (model,)).fetchall()
+    """{(series, time step in s): {"j": [J_paper of runs that emptied], "n": runs}}."""
+    path = pathlib.Path(store).resolve()
+    if not path.is_file():
+        sys.exit(f"{store}: no such store")
+    try:
+        con = sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True)
+        rows = con.execute("SELECT series, time_step_s, j_paper FROM runs WHERE model = ?", (model,)).fetchall()
+    except sqlite3.Error as e:
+        sys.exit(f"{store}: not a gapflow store ({e})")
     data = {}
-    for series, axes, jp in rows:
-        dt = json.loads(axes)["model.bullet.time_step_s" if model == "3d" else "model.box2d.time_step_s"]
+    for series, dt, jp in rows:
         d = data.setdefault((series, dt), {"j": [], "n": 0})
         d["n"] += 1
         if jp is not None:
@@ -100,8 +94,9 @@ def main():
             v, jv = "-", "-"
         else:
             d = r / ref_r - 1  # independent settings: relative errors add in quadrature
-            dse = (r / ref_r) * math.sqrt((se / r) ** 2 + (ref_se / ref_r) ** 2)
-            ddf = (se**2 + ref_se**2) ** 2 / (se**4 / df + ref_se**4 / ref_df)
+            rv, rv_ref = (se / r) ** 2, (ref_se / ref_r) ** 2
+            dse = (r / ref_r) * math.sqrt(rv + rv_ref)
+            ddf = (rv + rv_ref) ** 2 / (rv**2 / df + rv_ref**2 / ref_df)
             h = t975(ddf) * dse
             rel, v = f"{100 * d:+.2f} ± {100 * h:.2f} %", verdict(d, h, a.tolerance)
             jd, jse, jdf = ratio(b["j"], b0)
@@ -111,25 +106,15 @@ def main():
               f"| {mb:.2f} ± {t975(len(b['j']) - 1) * math.sqrt(vb):.2f} "
               f"| {mc:.2f} ± {t975(len(c['j']) - 1) * math.sqrt(vc):.2f} "
               f"| {r:.4f} ± {t975(df) * se:.4f} | {rel} | {v} | {jrel} | {jv} |")
-    # First-order fit R(dt) = R0 + R0 b dt, weighted least squares on the step means.
-    X = numpy.column_stack([numpy.ones(len(xs)), xs])
-    W = numpy.diag(ws)
-    cov = numpy.linalg.inv(X.T @ W @ X)
-    coef = cov @ X.T @ W @ numpy.array(ys)
-    resid = numpy.array(ys) - X @ coef
-    chi2 = float(resid @ W @ resid)
-    dof = len(xs) - 2
-    if dof > 0 and chi2 / dof > 1:
-        cov = cov * chi2 / dof
-    q = t975(dof) if dof > 0 else float("inf")
-    r0, slope = coef
-    b = slope / r0
-    b_se = math.sqrt(cov[1, 1]) / r0
+    # First-order fit R(dt) = R(0) (1 + b dt), weighted least squares on the step means.
+    if len(xs) < 3:
+        print("\nFirst-order fit: fewer than 3 steps.")
+        return
+    r0, r0h, b, bh, chi2, dof = weighted_line(xs, ys, ws)
     print()
-    print(f"First-order fit over {len(xs)} steps (weighted least squares; covariance widened by chi2/dof when > 1, "
-          f"Student-t with {dof} dof): R(0) = {r0:.4f} ± {q * math.sqrt(cov[0, 0]):.4f}, step error "
-          f"{100 * b:+.2f} ± {100 * q * b_se:.2f} % per ms (chi2/dof = {chi2:.1f}/{dof}).")
-
+    print(f"First-order fit over {len(xs)} steps (weighted least squares, 95 % intervals; covariance widened by "
+          f"chi2/dof when > 1, then Student-t with {dof} dof): R(0) = {r0:.4f} ± {r0h:.4f}, step error "
+          f"{100 * b:+.2f} ± {100 * bh:.2f} % per ms (chi2/dof = {chi2:.1f}/{dof}).")
 
 if __name__ == "__main__":
     main()

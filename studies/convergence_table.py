@@ -188,6 +188,11 @@ def linear_fit(points, series, key):
         ws.append(len(p[key]) / sd**2)
     if len(xs) < 3:
         return None
+    return weighted_line(xs, ys, ws)
+
+
+def weighted_line(xs, ys, ws):
+    """Weighted least squares y = b0 + b1 x (weights 1/variance), as described in linear_fit."""
     sw = sum(ws)
     sx = sum(w * x for w, x in zip(ws, xs))
     sy = sum(w * y for w, y in zip(ws, ys))

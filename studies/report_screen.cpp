@@ -36,6 +36,15 @@ struct CellResult {
   double wall_s = 0;            // their wall time (each run is single-threaded: CPU-seconds)
 };
 
+// The runs the study asks for now (current_screen_runs: stale keys left out), by cell.
+RunsByPoint runs_by_point(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs,
+                          ModelKind model) {
+  RunsByPoint out;
+  for (const ScreenRun& r : current_screen_runs(study, grid, runs, model).runs)
+    out[{r.cell->series, r.cell->axes_json}].push_back(r.run);
+  return out;
+}
+
 // Clogs per 100 particles passed over the replicates [from, to) of one point.
 double clog_rate(const std::vector<const StoredRun*>& runs, int from, int to) {
   double clogs = 0, passed = 0;
@@ -262,6 +271,7 @@ const char* screen_class(CheckRole r) {
 const char* check_class(const CheckResult& r) {
   return !r.check.valid ? "?" : r.above ? "above" : r.below ? "below" : "not distinguishable";
 }
+bool same_class(const CheckResult& r) { return std::string(screen_class(r.pick.role)) == check_class(r); }
 
 struct CheckedCell {
   CheckResult result;
@@ -272,12 +282,10 @@ std::vector<CheckedCell> checked_cells(const StudyDef& study, const ScreenGrid& 
                                        const std::vector<StoredRun>& runs) {
   const ScreenDef& s = *study.screen;
   const int from = first_check_replicate(s.racing), to = from + s.check_replicates;
-  RunsByPoint by_point;
-  for (const StoredRun& r : runs)
-    if (r.id.model == to_string(*s.check_model)) by_point[{r.id.series, r.id.axes_json}].push_back(&r);
+  const RunsByPoint by_point = runs_by_point(study, grid, runs, *s.check_model);
   std::vector<CheckedCell> out;
   for (const CheckResult& r : check_results(study, grid, picks, runs)) {
-    const ScreenCell& c = grid.cells[static_cast<std::size_t>(grid.raced[static_cast<std::size_t>(r.pick.raced)])];
+    const ScreenCell& c = picked_cell(grid, r.pick);
     const auto it = by_point.find({c.series, c.axes_json});
     out.push_back({r, it != by_point.end() ? clog_rate(it->second, from, to) : -1});
   }
@@ -295,8 +303,8 @@ TextTable check_table(const StudyDef& study, const ScreenGrid& grid, const std::
               fmt::format("clogs per 100 passed ({})", to_string(*s.check_model))};
   for (const CheckedCell& cc : checked) {
     const CheckResult& r = cc.result;
-    const ScreenCell& c = grid.cells[static_cast<std::size_t>(grid.raced[static_cast<std::size_t>(r.pick.raced)])];
-    const bool agrees = std::string(screen_class(r.pick.role)) == check_class(r);
+    const ScreenCell& c = picked_cell(grid, r.pick);
+    const bool agrees = same_class(r);
     t.rows.push_back({c.series, fmt_num(c.size_d, 3), fmt_num(c.distance_d, 3), fmt_num(c.gap_d, 3),
                       to_string(r.pick.role), fmt_num(r.pick.screen_ratio, 3),
                       r.check.valid ? fmt::format("{:.3f} {}", r.check.ratio, fmt_ci(r.check.lo, r.check.hi, 3))
@@ -313,30 +321,37 @@ TextTable check_table(const StudyDef& study, const ScreenGrid& grid, const std::
 
 std::string check_summary(const StudyDef& study, const ScreenGrid& grid, const std::vector<CheckedCell>& checked) {
   const ScreenDef& s = *study.screen;
-  int above = 0, held = 0, valid = 0, agree = 0;
+  int above = 0, at = 0, below = 0, above_done = 0, held = 0, valid = 0, agree = 0;
   std::vector<double> screen, check;
   for (const CheckedCell& cc : checked) {
     const CheckResult& r = cc.result;
-    above += r.pick.role == CheckRole::above ? 1 : 0;
+    const CheckRole role = r.pick.role;
+    (role == CheckRole::above ? above : role == CheckRole::control_at ? at : below) += 1;
     if (!r.check.valid) continue;
     ++valid;
-    held += r.pick.role == CheckRole::above && r.above ? 1 : 0;
-    agree += std::string(screen_class(r.pick.role)) == check_class(r) ? 1 : 0;
+    above_done += role == CheckRole::above ? 1 : 0;
+    held += role == CheckRole::above && r.above ? 1 : 0;
+    agree += same_class(r) ? 1 : 0;
     if (std::isfinite(r.pick.screen_ratio)) screen.push_back(r.pick.screen_ratio), check.push_back(r.check.ratio);
   }
   const double rho = screen.size() >= 3 ? spearman_correlation(screen, check) : std::nan("");
+  const std::string model = to_string(*s.check_model);
   return fmt::format(
-      "**Check in {}** (cells picked from the stored {} runs once the confirmation was complete: every survivor "
-      "whose final interval lies above 1, and {} controls: the survivors closest to J/J_0 = 1, and cells shown below "
-      "J_0 spread over their range; each with its gap's baseline, {} fresh replicates at indices {} to {}, seeds "
-      "that neither the race nor the confirmation used). {} of {} checked cells have all their runs. The effect "
-      "holds (the {} interval lies above 1) in **{} of {}** cells the screen put above J_0; {} of {} checked cells "
-      "are in the same class in both models; rank correlation (Spearman) of J/J_0 between the models over the "
-      "checked cells: {}.",
-      to_string(*s.check_model), to_string(grid.model), s.check_controls, s.check_replicates,
+      "**Check in {}** (cells picked from the stored {} runs once the confirmation was complete: the {} survivors "
+      "whose final interval lies above 1, and {} controls ({} asked for): {} at J_0 (the closest to J/J_0 = 1 among "
+      "cells shown neither above nor below), {} shown below J_0 (spread over their range); each with its gap's "
+      "baseline, {} fresh replicates at indices {} to {}, seeds that neither the race nor the confirmation used). "
+      "{} of {} checked cells have all their runs. The effect holds (the {} interval lies above 1) in **{} of {}** "
+      "such cells the screen put above J_0; {} of {} are in the same class in both models; rank correlation "
+      "(Spearman) of J/J_0 between the models over them: {}. Read with care: the screen's J/J_0 of a cell picked "
+      "because its interval lay above 1 is selected on (it tends to be high: winner's curse), while the {} numbers "
+      "are not; cells at one gap share their baseline runs; a control \"agrees\" also when {} replicates cannot "
+      "tell it from J_0.",
+      model, to_string(grid.model), above, at + below, s.check_controls, at, below, s.check_replicates,
       first_check_replicate(s.racing), first_check_replicate(s.racing) + s.check_replicates - 1, valid,
-      checked.size(), to_string(*s.check_model), held, above, agree, valid,
-      std::isnan(rho) ? std::string("n/a (fewer than 3 cells)") : fmt::format("{:.2f} ({} cells)", rho, screen.size()));
+      checked.size(), model, held, above_done, agree, valid,
+      std::isnan(rho) ? std::string("n/a (fewer than 3 cells)") : fmt::format("{:.2f} ({} cells)", rho, screen.size()),
+      model, s.check_replicates);
 }
 
 // The check's heat maps: one per shape and gap with a checked cell; unchecked cells grey.
@@ -345,7 +360,7 @@ std::vector<std::string> draw_check_maps(const StudyDef& study, const ScreenGrid
   const ScreenDef& s = *study.screen;
   std::map<std::size_t, const CheckedCell*> by_cell;  // grid cell index -> check
   for (const CheckedCell& cc : checked)
-    by_cell[static_cast<std::size_t>(grid.raced[static_cast<std::size_t>(cc.result.pick.raced)])] = &cc;
+    by_cell[static_cast<std::size_t>(grid.raced.at(static_cast<std::size_t>(cc.result.pick.raced)))] = &cc;
   std::vector<std::string> files;
   for (const std::string& shape : grid_shapes(grid))
     for (const ScreenCell& gap : grid.baselines) {
@@ -406,9 +421,7 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
   const ScreenGrid grid = screen_grid(study);
   const RaceInput in = screen_race_input(study, grid, runs);
   const RaceState state = replay_race(p, in);
-  RunsByPoint by_point;
-  for (const StoredRun& r : runs)
-    if (r.id.model == to_string(grid.model)) by_point[{r.id.series, r.id.axes_json}].push_back(&r);
+  const RunsByPoint by_point = runs_by_point(study, grid, runs, grid.model);
   const std::vector<CellResult> cells = cell_results(study, grid, in, state, by_point);
 
   ExperimentSection s;

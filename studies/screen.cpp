@@ -74,36 +74,48 @@ std::vector<Job> screen_cell_jobs(const StudyDef& study, const ScreenCell& cell,
   return point_jobs(study, series_named(study, cell.series), cell.point, model, from, to);
 }
 
-double screen_j(const RunRecord& r, const std::string& j_kind, double horizon_s) {
-  if (auto j = run_j(r, j_kind)) return *j;
+double screen_j(const RunRecord& r, double horizon_s) {
+  if (r.j_paper) return *r.j_paper;
   if (!(horizon_s > 0)) throw std::logic_error("screen_j: a run without a time limit");
-  return r.passed / horizon_s;
+  if (r.end_reason == EndReason::time_limit || r.end_reason == EndReason::permanent_clog) return r.passed / horizon_s;
+  return std::nan("");  // another ending (run.end = "n_passed") says nothing about the horizon
 }
 
-ScreenJ screen_j_by_replicate(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs,
-                              ModelKind model, std::size_t slots) {
+CurrentRuns current_screen_runs(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs,
+                                ModelKind model) {
   std::map<std::pair<std::string, std::string>, const ScreenCell*> by_axes;  // (series, axes) -> cell
   for (const ScreenCell& c : grid.baselines) by_axes[{c.series, c.axes_json}] = &c;
   for (int i : grid.raced) {
     const ScreenCell& c = grid.cells[static_cast<std::size_t>(i)];
     by_axes[{c.series, c.axes_json}] = &c;
   }
-  ScreenJ j;
+  CurrentRuns out;
   for (const StoredRun& r : runs) {
     if (r.id.study != study.name || r.id.model != to_string(model) || r.id.replicate < 0) continue;
     const auto found = by_axes.find({r.id.series, r.id.axes_json});
-    if (found == by_axes.end()) continue;  // a run of a cell the grid no longer has
-    const auto rep = static_cast<std::size_t>(r.id.replicate);
+    if (found == by_axes.end()) continue;  // a run of a cell the grid no longer has (or of another grid)
+    // A run stored before the study's settings changed (another time limit, another model key)
+    // has the same cell and replicate but another job key: it must not stand in for the run the
+    // study asks for now. One scenario compile per stored run.
+    const Job wanted = screen_cell_jobs(study, *found->second, model, r.id.replicate, r.id.replicate + 1).front();
+    if (wanted.id.key != r.id.key) {
+      out.ignored += 1;
+      continue;
+    }
+    out.runs.push_back({&r, found->second, wanted.time_limit_s});
+  }
+  return out;
+}
+
+ScreenJ screen_j_by_replicate(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs,
+                              ModelKind model, std::size_t slots) {
+  ScreenJ j;
+  for (const ScreenRun& r : current_screen_runs(study, grid, runs, model).runs) {
+    const auto rep = static_cast<std::size_t>(r.run->id.replicate);
     if (rep >= slots) continue;
-    // The run the study asks for now: a run stored before the study's settings changed (another
-    // time limit, another model key) has the same cell and replicate but another job key, and must
-    // not stand in for it. One scenario compile per stored run.
-    const ScreenCell& cell = *found->second;
-    const Job wanted = screen_cell_jobs(study, cell, model, r.id.replicate, r.id.replicate + 1).front();
-    if (wanted.id.key != r.id.key) continue;
-    auto& v = j[found->first];
+    auto& v = j[{r.cell->series, r.cell->axes_json}];
     v.resize(slots, std::nan(""));
-    v[rep] = screen_j(r.record, study.report.j, wanted.time_limit_s);
+    v[rep] = screen_j(r.run->record, r.time_limit_s);
   }
   return j;
 }
@@ -205,6 +217,10 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
                      "{} + {} replicates up to {}, then {} confirmation replicates per survivor\n",
                      study.name, grid.cells.size(), grid.cells.size() - grid.raced.size(), grid.baselines.size(),
                      race_rounds(p), p.initial, p.step, p.max, p.confirm);
+  if (const int stale = current_screen_runs(study, grid, store.load(study.name), grid.model).ignored; stale > 0)
+    log << fmt::format("screen: {} stored runs of this study ignored: their job key is not the one the study "
+                       "asks for now (its settings or scenario changed since they ran)\n",
+                       stale);
   RunnerSummary total;
   const std::set<std::string> stored_before = store.keys();
   std::set<std::string> listed;

@@ -46,19 +46,33 @@ ScreenGrid screen_grid(const StudyDef& study);
 // The jobs of one cell's (or baseline's) replicates [from, to) with `model`.
 std::vector<Job> screen_cell_jobs(const StudyDef& study, const ScreenCell& cell, ModelKind model, int from, int to);
 
-// The J the race uses: J of the study's [report] j kind when the run defines it; otherwise
-// (the board did not empty by the time limit, or a clog stopped it for good) the run's
-// throughput over the horizon, passed / horizon_s, where horizon_s is its run.time_limit_s.
-// For J_paper this is one quantity for every run, J_T = (spheres through by min(T, t_last)) /
-// min(T, t_last): the discharge rate, cut at the horizon T. A run stopped early for a permanent
-// clog counts as passing nothing more until T, which is what the no-flow stop asserts. The
-// cell and its baseline use the same T, so J_T / J_0,T compares like with like; at a gap where
-// everything clogs it measures how much passes before the clog (Zuriguel et al. 2011's effect).
-double screen_j(const RunRecord& r, const std::string& j_kind, double horizon_s);
+// The J the race uses, for cells and baselines alike: J_T, the discharge rate cut at the horizon
+// T = the run's run.time_limit_s. A run that emptied (all passed, or all but run.stranded_max left
+// behind when the flow stopped for good) enters with its J_paper; one that hit the time limit, or
+// that a clog stopped for good with more left behind, with passed / T: J_T = spheres through by
+// min(T, t_last) / min(T, t_last). A run stopped early by run.stop_after_no_flow_s counts as passing
+// nothing more until T, which is what that stop asserts. At a gap where everything clogs, J_T
+// measures how much passes before the clog (Zuriguel et al. 2011's effect). NaN for any other ending
+// (run.end = "n_passed"): it says nothing about the horizon, and the race waits on it as missing.
+double screen_j(const RunRecord& r, double horizon_s);
+
+// The stored runs of `model` that belong to a raced cell or a baseline and whose job key is the one
+// the study asks for now, with their time limit; `ignored` counts those of a cell with another key
+// (stored before the study's settings or scenario changed).
+struct ScreenRun {
+  const StoredRun* run = nullptr;
+  const ScreenCell* cell = nullptr;
+  double time_limit_s = 0;  // s
+};
+struct CurrentRuns {
+  std::vector<ScreenRun> runs;
+  int ignored = 0;
+};
+CurrentRuns current_screen_runs(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs,
+                                ModelKind model);
 
 // J by replicate index (NaN = not stored) for each cell and baseline, keyed by (series, axes_json),
-// from the stored runs of `model` whose job key is the one the study asks for now (a run stored
-// under earlier settings is ignored); replicates >= slots are ignored.
+// from current_screen_runs; replicates >= slots are left out.
 using ScreenJ = std::map<std::pair<std::string, std::string>, std::vector<double>>;
 ScreenJ screen_j_by_replicate(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs,
                               ModelKind model, std::size_t slots);

@@ -24,13 +24,57 @@ struct Candidate {
   double ratio = 0;
 };
 
-// `n` of the sorted candidates, spread evenly (n = 1: the median), in raced order.
-std::vector<Candidate> spread(std::vector<Candidate> sorted, int n) {
+// What the screen concluded of each raced cell: above J_0 (its final interval), shown below it
+// (dropped with an upper bound under 1, or a final interval under 1), or neither ("at": not
+// distinguishable, or dropped by a rule that does not show it below 1, e.g. best_margin). A cell
+// whose J/J_0 is undefined (its baseline passed nothing) is in none. nullopt while a survivor's
+// confirmation runs are missing.
+struct ScreenClasses {
+  std::vector<Candidate> above, at, below;
+};
+std::optional<ScreenClasses> screen_classes(const RacingParams& p, const RaceInput& in, const RaceState& state) {
+  std::size_t survivors = 0;
+  for (std::size_t c = 0; c < in.cells.size(); ++c) survivors += state.alive(static_cast<int>(c)) ? 1 : 0;
+  std::vector<const RaceDecision*> last(in.cells.size(), nullptr);
+  for (const RaceDecision& d : state.decisions) last[static_cast<std::size_t>(d.cell)] = &d;
+  ScreenClasses out;
+  for (int c = 0; c < static_cast<int>(in.cells.size()); ++c) {
+    const RaceCell& cell = in.cells[static_cast<std::size_t>(c)];
+    if (!state.alive(c)) {
+      const RaceDecision& d = *last[static_cast<std::size_t>(c)];
+      if (!std::isnan(d.ratio)) (d.upper < 1 ? out.below : out.at).push_back({c, d.ratio});
+      continue;
+    }
+    const int from = p.max, to = p.max + p.confirm;
+    if (replicate_slice(cell.j, from, to).empty() ||
+        replicate_slice(in.baselines.at(static_cast<std::size_t>(cell.baseline)), from, to).empty())
+      return std::nullopt;
+    const FinalEstimate f = final_estimate(p, in, c, survivors);
+    if (!f.ratio.valid) continue;
+    (f.above ? out.above : f.below ? out.below : out.at).push_back({c, f.ratio.ratio});
+  }
+  return out;
+}
+
+bool by_cell(const Candidate& a, const Candidate& b) { return a.raced < b.raced; }
+
+// The n candidates closest to J/J_0 = 1, in cell order.
+std::vector<Candidate> closest_to_one(std::vector<Candidate> v, std::size_t n) {
+  std::stable_sort(v.begin(), v.end(),
+                   [](const Candidate& a, const Candidate& b) { return std::abs(a.ratio - 1) < std::abs(b.ratio - 1); });
+  v.resize(std::min(v.size(), n));
+  std::sort(v.begin(), v.end(), by_cell);
+  return v;
+}
+
+// n candidates spread evenly over their range of J/J_0 (n = 1: the median), in cell order: the
+// controls are then typical of what the screen rejected, not only its borderline cases.
+std::vector<Candidate> spread(std::vector<Candidate> v, std::size_t n) {
+  std::stable_sort(v.begin(), v.end(), [](const Candidate& a, const Candidate& b) { return a.ratio < b.ratio; });
+  n = std::min(n, v.size());
   std::vector<Candidate> out;
-  const auto size = static_cast<int>(sorted.size());
-  n = std::min(n, size);
-  for (int k = 0; k < n; ++k) out.push_back(sorted[static_cast<std::size_t>((2 * k + 1) * size / (2 * n))]);
-  std::sort(out.begin(), out.end(), [](const Candidate& a, const Candidate& b) { return a.raced < b.raced; });
+  for (std::size_t k = 0; k < n; ++k) out.push_back(v[(2 * k + 1) * v.size() / (2 * n)]);
+  std::sort(out.begin(), out.end(), by_cell);
   return out;
 }
 
@@ -39,47 +83,21 @@ std::vector<Candidate> spread(std::vector<Candidate> sorted, int n) {
 std::optional<std::vector<CheckPick>> check_picks(const RacingParams& p, const RaceInput& in, const RaceState& state,
                                                   int controls) {
   if (!state.screening_done(p)) return std::nullopt;
-  std::size_t survivors = 0;
-  for (std::size_t c = 0; c < in.cells.size(); ++c) survivors += state.alive(static_cast<int>(c)) ? 1 : 0;
-  std::vector<double> last_ratio(in.cells.size(), std::nan(""));
-  for (const RaceDecision& d : state.decisions) last_ratio[static_cast<std::size_t>(d.cell)] = d.ratio;
-  std::vector<CheckPick> above;
-  std::vector<Candidate> at, below;
-  for (int c = 0; c < static_cast<int>(in.cells.size()); ++c) {
-    if (!state.alive(c)) {
-      below.push_back({c, last_ratio[static_cast<std::size_t>(c)]});
-      continue;
-    }
-    const FinalEstimate f = final_estimate(p, in, c, survivors);
-    if (!f.ratio.valid) return std::nullopt;  // its confirmation runs are not all stored
-    if (f.above)
-      above.push_back({c, CheckRole::above, f.ratio.ratio});
-    else
-      (f.below ? below : at).push_back({c, f.ratio.ratio});
-  }
-  // At J_0: the survivors closest to 1. Below: spread over the range, so that the controls
-  // are typical of what the screen rejected rather than its borderline cases only.
-  std::stable_sort(at.begin(), at.end(),
-                   [](const Candidate& a, const Candidate& b) { return std::abs(a.ratio - 1) < std::abs(b.ratio - 1); });
-  at.resize(std::min(at.size(), static_cast<std::size_t>((controls + 1) / 2)));
-  std::sort(at.begin(), at.end(), [](const Candidate& a, const Candidate& b) { return a.raced < b.raced; });
-  std::stable_sort(below.begin(), below.end(), [](const Candidate& a, const Candidate& b) {
-    return a.ratio < b.ratio || (!std::isnan(a.ratio) && std::isnan(b.ratio));
-  });
-  const int n_below = controls - static_cast<int>(at.size());
-  std::vector<CheckPick> out = above;
+  const std::optional<ScreenClasses> classes = screen_classes(p, in, state);
+  if (!classes) return std::nullopt;
+  std::vector<CheckPick> out;
+  for (const Candidate& c : classes->above) out.push_back({c.raced, CheckRole::above, c.ratio});
+  const auto n = static_cast<std::size_t>(controls);
+  const std::vector<Candidate> at = closest_to_one(classes->at, (n + 1) / 2);
   for (const Candidate& c : at) out.push_back({c.raced, CheckRole::control_at, c.ratio});
-  for (const Candidate& c : spread(below, n_below)) out.push_back({c.raced, CheckRole::control_below, c.ratio});
+  for (const Candidate& c : spread(classes->below, n - at.size()))
+    out.push_back({c.raced, CheckRole::control_below, c.ratio});
   return out;
 }
-
-namespace {
 
 const ScreenCell& picked_cell(const ScreenGrid& grid, const CheckPick& pick) {
   return grid.cells.at(static_cast<std::size_t>(grid.raced.at(static_cast<std::size_t>(pick.raced))));
 }
-
-}  // namespace
 
 std::vector<Job> check_jobs(const StudyDef& study, const ScreenGrid& grid, const std::vector<CheckPick>& picks) {
   const ScreenDef& s = *study.screen;

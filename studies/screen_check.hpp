@@ -3,8 +3,10 @@
 //
 // Once the screen's confirmation batch is complete, the cells to check are a function of the
 // stored runs alone: every survivor whose final interval lies above 1, plus `check_controls`
-// cells that are not above (half the closest to J/J_0 = 1 among the other survivors, half spread
-// over the cells shown below J_0, dropped ones included). Each picked cell and the baseline of
+// cells that are not above: (n + 1) / 2 "at J_0" (the closest to J/J_0 = 1 among the cells not
+// shown above or below: survivors not distinguishable from J_0, cells dropped by a rule that does
+// not show them below 1), the rest spread over the cells shown below J_0 (dropped with an upper
+// bound under 1, or a final interval under 1); fewer when there are not enough such cells. Each picked cell and the baseline of
 // its gap get `check_replicates` runs of `check_model` at replicate indices that neither the
 // race nor the confirmation used (fresh particle sets and seeds), and J/J_0 in that model is
 // the same ratio of means with its delta-method interval as the screen's (studies/racing.hpp).
@@ -34,6 +36,9 @@ int first_check_replicate(const RacingParams& p);
 // screen's confirmation is incomplete (the picks depend on it).
 std::optional<std::vector<CheckPick>> check_picks(const RacingParams& p, const RaceInput& in, const RaceState& state,
                                                   int controls);
+
+// The grid cell of a pick.
+const ScreenCell& picked_cell(const ScreenGrid& grid, const CheckPick& pick);
 
 // The check model's jobs: each pick and the baseline of each gap it lies at.
 std::vector<Job> check_jobs(const StudyDef& study, const ScreenGrid& grid, const std::vector<CheckPick>& picks);

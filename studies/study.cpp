@@ -333,6 +333,10 @@ StudyDef parse_study(std::string_view text, std::string_view source_name, const 
     d.report = read_report(rt);
     if (!d.report.baseline.empty() && !labels.count(d.report.baseline))
       rt.fail("baseline", *r->get("baseline"), "must be the label of one of the study's [[series]]");
+    if (d.screen && d.report.j != "paper")
+      rt.fail("j", *r->get("j"),
+              "a [screen] races J_paper cut at the time limit (README \"Screens (racing)\"): leave j out or set "
+              "\"paper\"");
   }
   return d;
 }

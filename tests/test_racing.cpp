@@ -381,6 +381,27 @@ TEST(ScreenStudy, BadKeysExitTwoWithLocation) {
              "screen.check_model");  // the screen's own model checks nothing
   expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid + "check_replicates = 4\n", "10:20",
              "screen.check_replicates");  // without check_model
+  expect_bad("shapes = [\"A\"]\ntriangle_side_d = [2]\n" + grid, "5:5", "report.j",
+             "[report]\nj = \"mid\"\n");  // a screen races J_paper cut at the time limit
+}
+
+// A cell dropped by best_margin is not shown below J_0: it is an "at" control, not a "below" one.
+TEST(ScreenCheck, CellDroppedByTheMarginIsNotAControlBelow) {
+  RacingParams p;
+  p.initial = 2, p.step = 1, p.max = 2, p.confirm = 3;
+  p.best_margin = 0.05;
+  auto cell = [](double mean) { return std::vector<double>{mean - 1, mean + 1, mean - 1, mean, mean + 1}; };
+  RaceInput in;
+  in.baseline_names = {"W"};
+  in.baselines = {cell(100)};
+  for (double mean : {140.0, 101.0}) in.cells.push_back({"c", 0, cell(mean)});
+  const RaceState state = replay_race(p, in);
+  ASSERT_FALSE(state.alive(1));  // 1.01 lies below 1.40's lower bound minus 0.05
+  const auto picks = check_picks(p, in, state, 1);
+  ASSERT_TRUE(picks.has_value());
+  ASSERT_EQ(picks->size(), 2u);
+  EXPECT_EQ((*picks)[1].raced, 1);
+  EXPECT_EQ((*picks)[1].role, CheckRole::control_at);
 }
 
 // The check's picks on synthetic data (no simulation): every survivor above J_0, then the
@@ -408,6 +429,18 @@ TEST(ScreenCheck, PicksCellsAboveAndControlsAtAndBelow) {
   EXPECT_TRUE(state.alive(5));
   EXPECT_EQ((*picks)[3].raced, 6);
   EXPECT_EQ((*picks)[3].role, CheckRole::control_below);
+  // Two below-controls: spread over 0.6, 0.7, 0.8, 0.96 (the quartiles' picks 0.7 and 0.96).
+  const auto more = check_picks(p, in, state, 4);
+  ASSERT_TRUE(more.has_value());
+  ASSERT_EQ(more->size(), 5u);
+  EXPECT_EQ((*more)[3].raced, 4);
+  EXPECT_EQ((*more)[4].raced, 5);
+  // A baseline that passed nothing leaves J/J_0 undefined: no pick, and no stall.
+  RaceInput dead = in;
+  for (std::size_t i = 2; i < 5; ++i) dead.baselines[0][i] = 0;
+  const auto none = check_picks(p, dead, replay_race(p, dead), 3);
+  ASSERT_TRUE(none.has_value());
+  for (const CheckPick& pick : *none) EXPECT_EQ(pick.role, CheckRole::control_below) << pick.raced;
   // Before the confirmation is complete there is nothing to pick.
   RaceInput partial = in;
   partial.cells[1].j[4] = std::nan("");
@@ -477,6 +510,10 @@ TEST(ScreenStudy, RunsThatDidNotEmptyEnterWithTheirThroughputOverTheHorizon) {
   EXPECT_EQ(in.cells[0].j.at(0), 0.0);   // clogged for good with nothing through
   EXPECT_EQ(in.cells[0].j.at(1), 7.5);   // 30 through by the 4 s horizon
   EXPECT_EQ(in.cells[0].j.at(2), 20.0);  // emptied: its J_paper
+  // An ending that says nothing about the horizon (run.end = "n_passed") is no value at all.
+  RunRecord r;
+  r.passed = 30, r.end_reason = EndReason::n_passed;
+  EXPECT_TRUE(std::isnan(screen_j(r, 4.0)));
 }
 
 }  // namespace
