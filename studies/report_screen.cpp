@@ -32,6 +32,7 @@ struct CellResult {
   RaceDecision last;            // its last decision (dropped: the one that dropped it)
   FinalEstimate final;          // survivors: confirmation runs only
   double clogs_per_100 = -1;    // on the runs the shown J/J_0 comes from
+  std::string cut;              // of those runs, how many entered with passed / T and how many spheres they left
   int runs = 0;                 // stored runs of the cell
   double wall_s = 0;            // their wall time (each run is single-threaded: CPU-seconds)
 };
@@ -54,6 +55,18 @@ double clog_rate(const std::vector<const StoredRun*>& runs, int from, int to) {
       passed += r->record.passed;
     }
   return passed > 0 ? 100 * clogs / passed : -1;
+}
+
+// Runs among replicates [from, to) that did not empty (they enter J with passed / T), and the
+// spheres they left behind: "2 (1540 left)"; "" when every run emptied.
+std::string cut_runs(const std::vector<const StoredRun*>& runs, int from, int to) {
+  int cut = 0, left = 0;
+  for (const StoredRun* r : runs)
+    if (r->id.replicate >= from && r->id.replicate < to && !r->record.j_paper) {
+      cut += 1;
+      left += r->record.particles - r->record.passed;
+    }
+  return cut > 0 ? fmt::format("{} ({} left)", cut, left) : "";
 }
 
 void add_wall(CellResult& c, const std::vector<const StoredRun*>& runs) {
@@ -118,10 +131,12 @@ std::vector<CellResult> cell_results(const StudyDef& study, const ScreenGrid& gr
     if (c.dropped_round >= 0) {
       c.state = HeatCell::State::dropped;
       c.clogs_per_100 = clog_rate(cell_runs, 0, c.last.n);
+      c.cut = cut_runs(cell_runs, 0, c.last.n);
     } else if (state.screening_done(p)) {
       c.state = HeatCell::State::final;
       c.final = final_estimate(p, in, static_cast<int>(k), survivors);
       c.clogs_per_100 = clog_rate(cell_runs, p.max, p.max + p.confirm);
+      c.cut = cut_runs(cell_runs, p.max, p.max + p.confirm);
     }
   }
   return out;
@@ -175,11 +190,15 @@ TextTable budget_table(const StudyDef& study, const ScreenGrid& grid, const std:
 TextTable cells_table(const std::vector<CellResult>& cells, const RacingParams& p) {
   TextTable t;
   t.title = "Cells: fate and final J/J_0 (survivors: confirmation runs only)";
-  t.header = {"shape", "size/d", "D/d", "W/d", "runs", "clogs per 100 passed", "result"};
+  t.header = {"shape", "size/d", "D/d", "W/d", "runs", "clogs per 100 passed", "not emptied by T", "result"};
   for (const CellResult& c : cells)
     t.rows.push_back({c.cell->series, fmt_num(c.cell->size_d, 3), fmt_num(c.cell->distance_d, 3),
                       fmt_num(c.cell->gap_d, 3), fmt::format("{}", c.runs),
-                      c.clogs_per_100 >= 0 ? fmt_num(c.clogs_per_100, 3) : "n/a", fate_text(c, p)});
+                      c.clogs_per_100 >= 0 ? fmt_num(c.clogs_per_100, 3) : "n/a", c.cut, fate_text(c, p)});
+  t.notes.push_back(
+      "Clogs and \"not emptied by T\" count the runs the cell's J/J_0 comes from (dropped: its screening runs; "
+      "survivors: its confirmation runs). A run that did not empty enters with passed / T; the spheres it left "
+      "behind say whether a clog held the pile (hundreds) or the run was cut while flowing.");
   return t;
 }
 
