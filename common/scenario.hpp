@@ -159,7 +159,7 @@ struct Box2DDef {
 
 // [model.bullet]
 struct BulletDef {
-  double time_step_s = 0.002;       // s (lab); -2.5 +- 1.3 % in J against 0.5 ms (README, results/convergence-3d)
+  double time_step_s = 0.001;       // s (lab); the largest step within 1 % in J and J/J_0 (README, convergence-3d, -ratio-3d)
   int substeps = 1;                 // engine steps per time_step_s
   int solver_iterations = 10;
   bool sleeping = false;
