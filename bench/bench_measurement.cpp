@@ -63,7 +63,7 @@ void BM_Measurement(benchmark::State& state, ModelKind kind, double warmup_s) {
   state.counters["check_hash"] = crossings_hash(record);
 }
 
-// 1 s of flow in 2D (1000 steps), 0.4 s in 3D (200 steps), after a short warm-up.
+// 1 s of flow in 2D (1000 steps of 1 ms), 0.2 s in 3D (200 steps of 1 ms), after a short warm-up.
 BENCHMARK_CAPTURE(BM_Measurement, paper_medium_2d, ModelKind::box2d, 0.15)
     ->Name("Measurement2D/paper_medium")
     ->Iterations(1000)

@@ -24,7 +24,7 @@ namespace {
 constexpr double kWarmup2D = 0.3;
 constexpr double kTimed2D = 0.25;  // s (lab) timed: 250 steps of 1 ms
 constexpr double kWarmup3D = 0.3;
-constexpr double kTimed3D = 0.2;   // 100 steps of 2 ms
+constexpr double kTimed3D = 0.2;   // s (lab) timed: 200 steps of the default 1 ms
 
 void run_step_benchmark(benchmark::State& state, ModelKind kind, double warmup_s, double timed_s) {
   const int count = static_cast<int>(state.range(0));
@@ -60,10 +60,9 @@ void run_step_benchmark(benchmark::State& state, ModelKind kind, double warmup_s
 void BM_Step2D(benchmark::State& state) { run_step_benchmark(state, ModelKind::box2d, kWarmup2D, kTimed2D); }
 void BM_Step3D(benchmark::State& state) { run_step_benchmark(state, ModelKind::bullet, kWarmup3D, kTimed3D); }
 
-// Steps per repetition, from the timed window and the scenario's time steps
-// (model.box2d.time_step_s = 1 ms, model.bullet.time_step_s = 2 ms).
-constexpr long kSteps2D = static_cast<long>(kTimed2D / 0.001 + 0.5);
-constexpr long kSteps3D = static_cast<long>(kTimed3D / 0.002 + 0.5);
+// Steps per repetition, from the timed window and the models' default time steps.
+const long kSteps2D = static_cast<long>(kTimed2D / Box2DDef{}.time_step_s + 0.5);
+const long kSteps3D = static_cast<long>(kTimed3D / BulletDef{}.time_step_s + 0.5);
 
 BENCHMARK(BM_Step2D)
     ->Name("Step2D")

@@ -234,7 +234,7 @@ Rebounds rebounds_over_phases(double e, double step_s) {
 
 // At the default step the bounce is e^2 on average over the phases (measured 0.95 at e = 0.5 and
 // 0.96 at 0.9; single drops 0.3-1.5). It is not at every step: at 0.5 ms the mean falls to ~0.8
-// and at 0.25 ms spheres hardly bounce (0.05-0.15): sim3d/README.md, "Restitution and the step".
+// and at 0.25 ms spheres hardly bounce (mean 0.045): sim3d/README.md, "Restitution and the step".
 TEST(Sim3D, DropReboundsAboutESquaredOverImpactPhases) {
   for (double e : {0.5, 0.9}) {
     SCOPED_TRACE(e);
