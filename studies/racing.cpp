@@ -137,6 +137,7 @@ FinalEstimate final_estimate(const RacingParams& p, const RaceInput& in, int cel
   const std::vector<double> x = replicate_slice(c.j, p.max, p.max + p.confirm);
   const std::vector<double> y =
       replicate_slice(in.baselines.at(static_cast<std::size_t>(c.baseline)), p.max, p.max + p.confirm);
+  f.complete = !x.empty() && !y.empty();
   f.ratio = ratio_interval(x, y, p.confidence);
   if (!f.ratio.valid) return f;
   f.above = f.ratio.lo > 1;

@@ -95,6 +95,8 @@ RaceState replay_race(const RacingParams& p, const RaceInput& in);
 // `simultaneous_above`: the lower bound at confidence 1 - (1 - c)/n_survivors is above 1
 // (Bonferroni over the survivors: a family-wise statement for the whole map).
 struct FinalEstimate {
+  bool complete = false;  // every confirmation run of the cell and its baseline is stored (the ratio
+                          // may still be invalid: a baseline that passed nothing has no J/J_0)
   RatioEstimate ratio;
   bool above = false, below = false;  // the interval excludes 1, above / below
   bool simultaneous_above = false;

@@ -85,8 +85,9 @@ std::string fate_text(const CellResult& c, const RacingParams& p) {
                          c.dropped_round + 1, c.last.n, c.last.ratio, c.last.upper, c.last.reason);
     case HeatCell::State::final: break;
   }
-  if (!c.final.ratio.valid)
+  if (!c.final.complete)
     return fmt::format("survivor: its {} confirmation runs (or its baseline's) are not all stored yet", p.confirm);
+  if (!c.final.ratio.valid) return "survivor: J/J_0 undefined (its baseline passed nothing in its confirmation runs)";
   const char* verdict = c.final.simultaneous_above ? "above J_0 (also simultaneously)"
                         : c.final.above            ? "above J_0"
                         : c.final.below            ? "below J_0"
@@ -300,7 +301,7 @@ struct CheckedCell {
 std::vector<CheckedCell> checked_cells(const StudyDef& study, const ScreenGrid& grid, const std::vector<CheckPick>& picks,
                                        const std::vector<StoredRun>& runs) {
   const ScreenDef& s = *study.screen;
-  const int from = first_check_replicate(s.racing), to = from + s.check_replicates;
+  const auto [from, to] = check_replicate_range(s);
   const RunsByPoint by_point = runs_by_point(study, grid, runs, *s.check_model);
   std::vector<CheckedCell> out;
   for (const CheckResult& r : check_results(study, grid, picks, runs)) {
@@ -367,7 +368,7 @@ std::string check_summary(const StudyDef& study, const ScreenGrid& grid, const s
       "are not; cells at one gap share their baseline runs; a control \"agrees\" also when {} replicates cannot "
       "tell it from J_0.",
       model, to_string(grid.model), above, at + below, s.check_controls, at, below, s.check_replicates,
-      first_check_replicate(s.racing), first_check_replicate(s.racing) + s.check_replicates - 1, valid,
+      check_replicate_range(s).from, check_replicate_range(s).to - 1, valid,
       checked.size(), model, held, above_done, agree, valid,
       std::isnan(rho) ? std::string("n/a (fewer than 3 cells)") : fmt::format("{:.2f} ({} cells)", rho, screen.size()),
       model, s.check_replicates);
@@ -422,6 +423,10 @@ void add_check(ExperimentSection& sec, const StudyDef& study, const ScreenGrid& 
   }
   const std::vector<CheckedCell> checked = checked_cells(study, grid, *picks, runs);
   sec.paragraphs.push_back(check_summary(study, grid, checked));
+  CellResult cost;  // every stored check run, cells and baselines (each single-threaded: wall = CPU)
+  for (const auto& [cell, cell_runs] : runs_by_point(study, grid, runs, *s.check_model)) add_wall(cost, cell_runs);
+  sec.paragraphs.push_back(fmt::format("The check's cost so far: {} {} runs, {} CPU-seconds.", cost.runs,
+                                       to_string(*s.check_model), fmt_num(cost.wall_s)));
   sec.tables.push_back(check_table(study, grid, checked));
   if (!plots) return;
   std::string list;

@@ -187,6 +187,13 @@ void add_summary(RunnerSummary& total, const RunnerSummary& step, const std::vec
   total.cancelled = step.cancelled;
 }
 
+void log_stale_runs(std::ostream& log, int stale) {
+  if (stale > 0)
+    log << fmt::format("screen: {} stored runs of this study ignored: their job key is not the one the study asks "
+                       "for now (its settings or scenario changed since they ran)\n",
+                       stale);
+}
+
 // The other model's check of the finished screen (studies/screen_check.hpp).
 RunnerSummary run_check(const StudyDef& study, const ScreenGrid& grid, Store& store, const RunnerOptions& options,
                         const JobRunner& run, std::ostream& log, RunnerSummary total,
@@ -201,7 +208,7 @@ RunnerSummary run_check(const StudyDef& study, const ScreenGrid& grid, Store& st
   log << fmt::format("screen check in {}: {} cells above J_0 and {} controls, {} fresh replicates each and per "
                      "baseline (replicates {} to {}): {} jobs\n",
                      to_string(*s.check_model), above, picks->size() - above, s.check_replicates,
-                     first_check_replicate(s.racing), first_check_replicate(s.racing) + s.check_replicates - 1,
+                     check_replicate_range(s).from, check_replicate_range(s).to - 1,
                      jobs.size());
   add_summary(total, run(jobs, store, options), jobs, stored_before, listed);
   return total;
@@ -217,16 +224,14 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
                      "{} + {} replicates up to {}, then {} confirmation replicates per survivor\n",
                      study.name, grid.cells.size(), grid.cells.size() - grid.raced.size(), grid.baselines.size(),
                      race_rounds(p), p.initial, p.step, p.max, p.confirm);
-  if (const int stale = current_screen_runs(study, grid, store.load(study.name), grid.model).ignored; stale > 0)
-    log << fmt::format("screen: {} stored runs of this study ignored: their job key is not the one the study "
-                       "asks for now (its settings or scenario changed since they ran)\n",
-                       stale);
   RunnerSummary total;
   const std::set<std::string> stored_before = store.keys();
   std::set<std::string> listed;
   int printed = 0;
   for (int stage = 0; stage <= race_rounds(p) + 1; ++stage) {
-    const RaceState state = replay_race(p, screen_race_input(study, grid, store.load(study.name)));
+    const std::vector<StoredRun> stored = store.load(study.name);
+    if (stage == 0) log_stale_runs(log, current_screen_runs(study, grid, stored, grid.model).ignored);
+    const RaceState state = replay_race(p, screen_race_input(study, grid, stored));
     for (; printed < state.rounds_decided; ++printed) print_round(log, p, state, printed, grid.raced.size());
     const std::vector<Job> jobs = screen_next_jobs(study, grid, state);
     const bool confirming = state.screening_done(p);

@@ -15,7 +15,10 @@ const char* to_string(CheckRole r) {
   return "?";
 }
 
-int first_check_replicate(const RacingParams& p) { return p.max + p.confirm; }
+ReplicateRange check_replicate_range(const ScreenDef& s) {
+  const int from = s.racing.max + s.racing.confirm;
+  return {from, from + s.check_replicates};
+}
 
 namespace {
 
@@ -39,17 +42,13 @@ std::optional<ScreenClasses> screen_classes(const RacingParams& p, const RaceInp
   for (const RaceDecision& d : state.decisions) last[static_cast<std::size_t>(d.cell)] = &d;
   ScreenClasses out;
   for (int c = 0; c < static_cast<int>(in.cells.size()); ++c) {
-    const RaceCell& cell = in.cells[static_cast<std::size_t>(c)];
     if (!state.alive(c)) {
       const RaceDecision& d = *last[static_cast<std::size_t>(c)];
       if (!std::isnan(d.ratio)) (d.upper < 1 ? out.below : out.at).push_back({c, d.ratio});
       continue;
     }
-    const int from = p.max, to = p.max + p.confirm;
-    if (replicate_slice(cell.j, from, to).empty() ||
-        replicate_slice(in.baselines.at(static_cast<std::size_t>(cell.baseline)), from, to).empty())
-      return std::nullopt;
     const FinalEstimate f = final_estimate(p, in, c, survivors);
+    if (!f.complete) return std::nullopt;
     if (!f.ratio.valid) continue;
     (f.above ? out.above : f.below ? out.below : out.at).push_back({c, f.ratio.ratio});
   }
@@ -101,7 +100,7 @@ const ScreenCell& picked_cell(const ScreenGrid& grid, const CheckPick& pick) {
 
 std::vector<Job> check_jobs(const StudyDef& study, const ScreenGrid& grid, const std::vector<CheckPick>& picks) {
   const ScreenDef& s = *study.screen;
-  const int from = first_check_replicate(s.racing), to = from + s.check_replicates;
+  const auto [from, to] = check_replicate_range(s);
   std::vector<Job> out;
   std::set<int> gaps;
   for (const CheckPick& pick : picks) {
@@ -118,7 +117,7 @@ std::vector<Job> check_jobs(const StudyDef& study, const ScreenGrid& grid, const
 std::vector<CheckResult> check_results(const StudyDef& study, const ScreenGrid& grid,
                                        const std::vector<CheckPick>& picks, const std::vector<StoredRun>& runs) {
   const ScreenDef& s = *study.screen;
-  const int from = first_check_replicate(s.racing), to = from + s.check_replicates;
+  const auto [from, to] = check_replicate_range(s);
   const auto slots = static_cast<std::size_t>(to);
   const ScreenJ j = screen_j_by_replicate(study, grid, runs, *s.check_model, slots);
   std::vector<CheckResult> out;

@@ -29,8 +29,11 @@ struct CheckPick {
   double screen_ratio = 0;  // J/J_0 in the screen: the final one (survivors) or at the drop
 };
 
-// The first replicate index of the check: after the race's and the confirmation's.
-int first_check_replicate(const RacingParams& p);
+// The check's replicate indices [from, to): after the race's and the confirmation's.
+struct ReplicateRange {
+  int from = 0, to = 0;
+};
+ReplicateRange check_replicate_range(const ScreenDef& s);
 
 // The cells to check, in raced order within each role (above, at, below); nullopt while the
 // screen's confirmation is incomplete (the picks depend on it).

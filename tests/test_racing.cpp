@@ -257,6 +257,7 @@ TEST(ScreenStudy, TinyMapRunsDecidesResumesAndReports) {
   EXPECT_NE(run.output.find("screen check in 3d"), std::string::npos) << run.output;
   EXPECT_NE(md.find("**Check in 3d**"), std::string::npos) << md;
   EXPECT_NE(md.find("| control: at J_0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("The check's cost so far: 6 3d runs"), std::string::npos) << md;  // 3 for the cell, 3 baseline
   // One worker instead of two, another store: the same decisions (they never depend on timing).
   const std::string db1 = shell_quoted((dir / "s1.sqlite").string()), out1 = shell_quoted((dir / "r1").string());
   ASSERT_EQ(run_gapflow("study " + study + " --db " + db1 + " --jobs 1", 300).code, 0);
@@ -272,7 +273,7 @@ TEST(ScreenStudy, QuickScreenIsReportedOnItsThinnedGrid) {
   const std::string db = shell_quoted((dir / "q.sqlite").string());
   const auto run = run_gapflow("study " + study + " --quick --db " + db + " --jobs 2", 300);
   ASSERT_EQ(run.code, 0) << run.output;
-  EXPECT_NE(run.output.find("4 cells"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("'tiny-screen': 4 cells"), std::string::npos) << run.output;
   const auto rep = run_gapflow("report " + db + " --quick --out " + shell_quoted((dir / "q").string()) +
                                    " --no-snapshots --no-plots",
                                120);
@@ -438,12 +439,16 @@ TEST(ScreenCheck, PicksCellsAboveAndControlsAtAndBelow) {
   // A baseline that passed nothing leaves J/J_0 undefined: no pick, and no stall.
   RaceInput dead = in;
   for (std::size_t i = 2; i < 5; ++i) dead.baselines[0][i] = 0;
+  const FinalEstimate undefined = final_estimate(p, dead, 1, 4);
+  EXPECT_TRUE(undefined.complete);  // every run is stored ...
+  EXPECT_FALSE(undefined.ratio.valid);  // ... but J/J_0 is undefined
   const auto none = check_picks(p, dead, replay_race(p, dead), 3);
   ASSERT_TRUE(none.has_value());
   for (const CheckPick& pick : *none) EXPECT_EQ(pick.role, CheckRole::control_below) << pick.raced;
   // Before the confirmation is complete there is nothing to pick.
   RaceInput partial = in;
   partial.cells[1].j[4] = std::nan("");
+  EXPECT_FALSE(final_estimate(p, partial, 1, 4).complete);
   EXPECT_FALSE(check_picks(p, partial, replay_race(p, partial), 3).has_value());
 }
 
