@@ -97,6 +97,10 @@ struct RunRecord {
   double sim_per_wall() const { return wall_time_s > 0 ? sim_time_s / wall_time_s : 0; }
 };
 
+// False for a run whose store kept its summary but not its crossing times (a store slimmed by
+// scripts/slim_store.py): spheres passed and no crossing row is left.
+inline bool crossings_stored(const RunRecord& r) { return r.passed == 0 || !r.crossings.empty(); }
+
 void write_json(std::ostream& out, const RunRecord& r);
 // One-screen summary for people.
 // Why a finished run is not a valid discharge, or nothing: particles that left the

@@ -177,7 +177,12 @@ void mid_discharge(SnapshotPick& p) {
   for (const Crossing& c : r.crossings) t.push_back(c.t);
   std::sort(t.begin(), t.end());
   const std::size_t half = static_cast<std::size_t>((r.particles + 1) / 2);
-  if (t.empty()) {
+  if (!crossings_stored(r)) {
+    p.t_s = std::min(r.sim_time_s / 2, kSnapshotMaxTimeS);
+    p.when = fmt::format("half-way through the run ({} spheres crossed in it; the store keeps no crossing times, "
+                         "scripts/slim_store.py)",
+                         r.passed);
+  } else if (t.empty()) {
     p.t_s = std::min(r.sim_time_s / 2, kSnapshotMaxTimeS);
     p.when = "half-way through a run without crossings";
   } else if (t.size() >= half && half > 0) {
@@ -321,7 +326,8 @@ void draw_one(Snapshot& s, std::size_t i, const Job& job, const fs::path& dir, s
       s.width = view.width(), s.height = view.height();
     }
   }
-  s.passed_stored = static_cast<int>(std::count_if(p.run->record.crossings.begin(), p.run->record.crossings.end(),
+  if (crossings_stored(p.run->record))
+    s.passed_stored = static_cast<int>(std::count_if(p.run->record.crossings.begin(), p.run->record.crossings.end(),
                                                    [&](const Crossing& c) { return c.t <= s.t_drawn_s; }));
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   log << fmt::format("snapshot '{}': re-ran job {} ({}) to t = {:.2f} s in {:.1f} s wall, {:.1f} s CPU{}\n", p.cls,
@@ -366,6 +372,10 @@ std::string caption(const Snapshot& s) {
                                 id.replicate, p.run_why, id.base_seed, id.run_seed, id.key, p.run->code_version);
   if (!s.problem.empty()) return out + ". Not drawn: " + s.problem + ".\n";
   out += fmt::format(", t = {:.2f} s after release, {}. ", s.t_drawn_s, p.when);
+  if (!s.comparable())
+    return out + fmt::format("The re-run had {} crossings by then; the store keeps no crossing times to compare "
+                             "them with (a picture of the same scenario and seed). {} x {} px.\n",
+                             s.passed_rerun, s.width, s.height);
   out += s.matches() ? fmt::format("The re-run had {} crossings by then, as the stored run: the picture is of that run.",
                                    s.passed_rerun)
                      : fmt::format("The re-run had {} crossings by then, the stored run {}: this code no longer "

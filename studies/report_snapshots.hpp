@@ -50,8 +50,9 @@ struct Snapshot {
   int width = 0, height = 0;        // px
   double t_drawn_s = 0;             // s after release: the step it was drawn at
   int passed_rerun = -1;            // crossings by t_drawn_s in the re-run
-  int passed_stored = -1;           // and in the stored run
+  int passed_stored = -1;           // and in the stored run; -1: the store kept no crossing times
   bool matches() const { return passed_rerun >= 0 && passed_rerun == passed_stored; }
+  bool comparable() const { return passed_stored >= 0; }
 };
 
 // The study file the runs were made from: `file` when given, else the copy recorded in the
