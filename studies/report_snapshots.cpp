@@ -177,14 +177,10 @@ void mid_discharge(SnapshotPick& p) {
   for (const Crossing& c : r.crossings) t.push_back(c.t);
   std::sort(t.begin(), t.end());
   const std::size_t half = static_cast<std::size_t>((r.particles + 1) / 2);
-  if (!crossings_stored(r)) {
+  if (t.empty()) {  // none crossed, or a slim store kept none (scripts/slim_store.py)
     p.t_s = std::min(r.sim_time_s / 2, kSnapshotMaxTimeS);
-    p.when = fmt::format("half-way through the run ({} spheres crossed in it; the store keeps no crossing times, "
-                         "scripts/slim_store.py)",
-                         r.passed);
-  } else if (t.empty()) {
-    p.t_s = std::min(r.sim_time_s / 2, kSnapshotMaxTimeS);
-    p.when = "half-way through a run without crossings";
+    p.when = r.passed > 0 ? fmt::format("half-way through the run ({} spheres crossed in it)", r.passed)
+                          : "half-way through a run without crossings";
   } else if (t.size() >= half && half > 0) {
     p.t_s = t[half - 1];
     p.when = fmt::format("when {} of the {} spheres had crossed in the stored run (mid-discharge: the flow "
@@ -332,7 +328,9 @@ void draw_one(Snapshot& s, std::size_t i, const Job& job, const fs::path& dir, s
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   log << fmt::format("snapshot '{}': re-ran job {} ({}) to t = {:.2f} s in {:.1f} s wall, {:.1f} s CPU{}\n", p.cls,
                      job.id.key, job.id.model, s.t_drawn_s, wall, double(std::clock() - cpu0) / CLOCKS_PER_SEC,
-                     s.matches() ? "" : " (crossings differ from the stored run)");
+                     !s.comparable() ? " (the store keeps no crossings)"
+                     : s.matches()   ? ""
+                                     : " (crossings differ from the stored run)");
 }
 
 }  // namespace

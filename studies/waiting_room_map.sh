@@ -14,10 +14,11 @@
 # run. The *.time file gets one line per invocation. GAPFLOW=path runs another binary (a copy, so
 # that rebuilding the tree does not change the program under a running map).
 set -euo pipefail
+gapflow_env=${GAPFLOW:+$(realpath "$GAPFLOW")}  # before the cd: a relative path is the caller's
 cd "$(dirname "$0")/.."
 out=${1:-results/waiting-room-map}
 jobs=${2:-$(nproc)}
-gapflow=${GAPFLOW:-build/app/gapflow}
+gapflow=${gapflow_env:-build/app/gapflow}
 study=studies/paper/waiting_room_map.toml
 store=results/waiting-room-map-quick/runs.sqlite
 slim=$out/runs.sqlite
@@ -26,7 +27,10 @@ if [[ ! -e $store && -e $slim ]]; then
   echo "starting from $slim (the committed store without crossings)"
   cp "$slim" "$store"
 fi
+status=0
+trap 'echo "interrupted: writing the checkpoint $slim" >&2' INT  # a handler, not '': gapflow keeps its Ctrl-C
 /usr/bin/time -a -f "%e s wall, %U s user CPU: screen and check" -o "$out/map.time" \
-  "$gapflow" study "$study" --quick --jobs "$jobs"
-/usr/bin/python3 scripts/slim_store.py "$store" "$slim"
+  "$gapflow" study "$study" --quick --jobs "$jobs" || status=$?
+/usr/bin/python3 scripts/slim_store.py "$store" "$slim"  # also after an interruption: the checkpoint
+[[ $status == 0 ]] || exit "$status"
 "$gapflow" report "$store" --study "$study" --quick --out "$out"

@@ -24,7 +24,7 @@ done
 [[ $(count "$work/slim.sqlite" "SELECT count(*) FROM crossings") == 0 ]] || fail "the slim copy kept crossings"
 
 resumed=$("$gapflow" study "$src/studies/examples/tiny.toml" --db "$work/slim.sqlite" --jobs 2 2>&1)
-grep -q "0 runs done now" <<< "$resumed" || fail "resuming on the slim copy ran jobs again: $resumed"
+grep -q " 0 runs done now" <<< "$resumed" || fail "resuming on the slim copy ran jobs again: $resumed"
 
 "$gapflow" report "$work/slim.sqlite" --study "$src/studies/examples/tiny.toml" --out "$work/report" > /dev/null 2>&1
 grep -q "keeps no crossing times" "$work/report/report.md" || fail "the report does not say the store has no crossings"
@@ -36,4 +36,14 @@ if /usr/bin/python3 "$src/scripts/slim_store.py" "$work/full.sqlite" "$work/note
 fi
 [[ $(cat "$work/notes.txt") == "not a store" ]] || fail "the user's file changed"
 grep -q "not a results store" "$work/err" || fail "no clear error: $(cat "$work/err")"
+# Never the source itself, never a full store without --force.
+if /usr/bin/python3 "$src/scripts/slim_store.py" "$work/full.sqlite" "$work/full.sqlite" 2> "$work/err"; then
+  fail "slimmed the source store in place"
+fi
+cp "$work/full.sqlite" "$work/other_full.sqlite"
+if /usr/bin/python3 "$src/scripts/slim_store.py" "$work/slim.sqlite" "$work/other_full.sqlite" 2> "$work/err"; then
+  fail "overwrote a full store without --force"
+fi
+grep -q "full store" "$work/err" || fail "no clear error for a full destination: $(cat "$work/err")"
+[[ $(count "$work/other_full.sqlite" "SELECT count(*) FROM crossings") -gt 0 ]] || fail "the full store lost its crossings"
 echo "slim store: ok"
