@@ -43,6 +43,8 @@ struct CalibrationDef {
   int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)
   std::uint64_t fresh_seed_offset = 7919;  // run.seed offset of the fresh-seed re-score (reported, decides nothing)
   std::uint64_t decision_seed_offset = 7907;  // run.seed offset of the held-out keep test (other seeds than the re-score)
+  int keep_test_replicate_factor = 4;  // the keep test runs the held-out points with this many times the data
+                                   // file's model replicates: its verdict must not hinge on the model's own noise
   double decisive_bic = 10;        // a BIC drop this large (Bayes factor ~150) lets the held-out chi^2 rise
                                    // within its own noise, sqrt(2 n_held_out), instead of having to fall
 };

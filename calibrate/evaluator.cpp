@@ -49,6 +49,14 @@ double ParameterSet::get(const std::string& key, double fallback) const {
 
 namespace {
 
+// A slimmed store (scripts/slim_store.py) keeps a run's summary without its crossing times: an
+// observable made of them would read such runs as runs that passed nothing.
+void require_crossings(const RunRecord& r) {
+  if (!crossings_stored(r))
+    throw std::runtime_error("a stored run has no crossing times (a store slimmed by scripts/slim_store.py); "
+                             "calibrate with the full store");
+}
+
 // One run's value of a per-run observable: a rate (particles/s), the front's arrival
 // (s), or the mean or spread of where its particles crossed the gap line (mm from the
 // gap's centre; plane frame, +x across). Missing when the run does not define it.
@@ -59,10 +67,12 @@ std::optional<double> per_run_value(ObservableKind kind, const RunRecord& r) {
     case ObservableKind::j_flowing: return r.j_flowing;
     case ObservableKind::j_star: return r.j_paper_star();
     case ObservableKind::front_arrival:
+      require_crossings(r);
       if (r.crossings.empty()) return std::nullopt;
       return r.crossings.front().t;  // sorted by time (GapMonitor::finish)
     case ObservableKind::exit_offset:
     case ObservableKind::exit_spread: {
+      require_crossings(r);
       std::vector<double> x_mm;
       for (const Crossing& c : r.crossings) x_mm.push_back(c.x * 1e3);
       const Summary s = summarize(x_mm);
@@ -150,14 +160,17 @@ Evaluator::Evaluator(const DataFile& data, Store& store, EvaluatorOptions option
     : data_(data), store_(store), options_(options) {}
 
 std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& sets, std::uint64_t seed,
-                                            int replicates) {
-  // Jobs: set x point x replicate, each with its own key.
+                                            int replicates, const std::vector<bool>& only) {
+  if (!only.empty() && only.size() != data_.points.size())
+    throw std::invalid_argument("evaluate: the points mask must have one flag per design point");
+  const auto wanted = [&](std::size_t i) { return only.empty() || only[i]; };
+  // Jobs: set x wanted point x replicate, each with its own key.
   std::vector<Job> jobs;
   std::vector<ScenarioDef> point_defs;
   for (std::size_t i = 0; i < data_.points.size(); ++i) point_defs.push_back(data_.point_scenario(i).def);
   for (std::size_t s = 0; s < sets.size(); ++s)
     for (std::size_t i = 0; i < data_.points.size(); ++i)
-      for (int r = 0; r < replicates; ++r) {
+      for (int r = 0; r < (wanted(i) ? replicates : 0); ++r) {
         Job job;
         job.model = options_.model;
         job.scenario = data_.scenario;
@@ -214,6 +227,11 @@ std::vector<Prediction> Evaluator::evaluate(const std::vector<ParameterSet>& set
   for (std::size_t s = 0; s < sets.size(); ++s) {
     Prediction& p = out[s];
     for (std::size_t i = 0; i < data_.points.size(); ++i) {
+      if (!wanted(i)) {
+        p.value.push_back(kNaN), p.fit.push_back(kNaN), p.se_fit.push_back(kNaN);
+        p.replicate_fit.emplace_back(), p.valid.push_back(false);
+        continue;
+      }
       std::vector<RunRecord> runs;
       for (int r = 0; r < replicates; ++r, ++j) {
         auto it = fresh.find(jobs[j].id.key);

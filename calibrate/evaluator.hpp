@@ -63,9 +63,12 @@ class Evaluator {
   Evaluator(const DataFile& data, Store& store, EvaluatorOptions options);
 
   // Every point for every set, all runs in one worker pool. `seed` is run.seed
-  // (the data file's for the fit; another for fresh-seed checks and twins).
-  // Throws RunCancelled when cancelled (what is stored stays stored).
-  std::vector<Prediction> evaluate(const std::vector<ParameterSet>& sets, std::uint64_t seed, int replicates);
+  // (the data file's for the fit; another for fresh-seed checks and twins). `only`,
+  // when not empty, names the points to simulate (one flag per point); the others get
+  // no runs and an invalid prediction. Throws RunCancelled when cancelled (what is
+  // stored stays stored).
+  std::vector<Prediction> evaluate(const std::vector<ParameterSet>& sets, std::uint64_t seed, int replicates,
+                                   const std::vector<bool>& only = {});
   std::vector<Prediction> evaluate(const std::vector<ParameterSet>& sets) {
     return evaluate(sets, data_.seed, data_.model_replicates);
   }

@@ -4,7 +4,12 @@
 # the 2D model; then the summary (confusion matrix, interval coverage, null
 # false-positive rate, held-out error before/after) in OUT/report.md.
 #
-#   studies/calibration_blind.sh [OUT] [JOBS]       (default results/calibration-blind, all cores)
+#   studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET]
+#       (default results/calibration-blind, all cores, offset 0)
+#
+# SEED_OFFSET is added to every case's seed: another offset draws another set of twins (other
+# sizes, other data noise) for the same cases, to test rules chosen after seeing one set on
+# twins they have not seen. Pass 5 (results/calibration-blind) used offset 1000.
 #
 # Resumable: a twin file or a calibration summary that exists is not made again,
 # and every run is kept in OUT/runs.sqlite (calibrations: identical runs are shared
@@ -14,9 +19,16 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-results/calibration-blind}
 jobs=${2:-$(nproc)}
-gapflow=build/app/gapflow
+seed_offset=${3:-0}
+gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 design=data/blind/design.toml
 mkdir -p "$out/twins" "$out/truth"
+# Twins and summaries of one seed offset must not be mixed with another's.
+if [[ -f $out/seed_offset && $(cat "$out/seed_offset") != "$seed_offset" ]]; then
+  echo "error: $out was made with seed offset $(cat "$out/seed_offset"), not $seed_offset; use another OUT" >&2
+  exit 2
+fi
+echo "$seed_offset" > "$out/seed_offset"
 
 # id  model  seed  planted (effect:NAME:SIZE | set:KEY=VALUE), space-separated
 cases="
@@ -51,6 +63,7 @@ twin-3d             3d 151
 
 echo "$cases" | while read -r id model seed planted; do
   [ -n "$id" ] || continue
+  seed=$((seed + seed_offset))
   twin="$out/twins/$id.toml"
   if [ ! -f "$twin" ]; then
     args=()

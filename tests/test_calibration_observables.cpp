@@ -146,5 +146,36 @@ TEST(EvaluatorObservables, PointsOnTheSameRunsCostNoExtraRuns) {
   EXPECT_GT(p.front().value[3], 0.0);
 }
 
+// The keep test simulates only the held-out points: a points mask runs nothing for the others.
+TEST(EvaluatorObservables, APointsMaskRunsOnlyThosePoints) {
+  TempDir dir("gapflow_observables_mask");
+  const DataFile d = parse(kFourPoints);
+  Store store(dir / "runs.sqlite");
+  EvaluatorOptions eo;
+  eo.workers = 2;
+  Evaluator ev(d, store, eo);
+  const std::vector<Prediction> p = ev.evaluate({ParameterSet{}}, d.seed, 3, {false, false, false, true});
+  EXPECT_EQ(ev.runs_simulated(), 3);  // the W = 5 d point only, 3 replicates
+  ASSERT_EQ(p.front().valid.size(), 4u);
+  EXPECT_FALSE(p.front().valid[0]);
+  EXPECT_FALSE(p.front().valid[2]);
+  EXPECT_TRUE(p.front().valid[3]);
+  EXPECT_TRUE(std::isnan(p.front().fit[0]));
+  EXPECT_THROW(ev.evaluate({ParameterSet{}}, d.seed, 3, {true}), std::invalid_argument);
+}
+
+// A slimmed store (scripts/slim_store.py) keeps the runs without their crossings: observables made
+// of crossings refuse it instead of reading runs that passed nothing.
+TEST(EvaluatorObservables, CrossingObservablesRefuseASlimmedStore) {
+  RunRecord r;
+  r.passed = 3;  // spheres went through, but no crossing row is left
+  EXPECT_FALSE(crossings_stored(r));
+  EXPECT_THROW(observe(ObservableKind::front_arrival, FitScale::log, {r}), std::runtime_error);
+  EXPECT_THROW(observe(ObservableKind::exit_spread, FitScale::log, {r}), std::runtime_error);
+  r.passed = 0;
+  EXPECT_TRUE(crossings_stored(r));
+  EXPECT_FALSE(observe(ObservableKind::front_arrival, FitScale::log, {r}).valid);
+}
+
 }  // namespace
 }  // namespace gapflow
