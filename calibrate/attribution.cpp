@@ -79,6 +79,26 @@ double bic(double chi2, int parameters, int points) {
   return chi2 + parameters * std::log(static_cast<double>(points));
 }
 
+Visibility step_visibility(const std::vector<std::vector<double>>& paired_differences,
+                           const std::vector<bool>& held_out) {
+  Visibility v;
+  for (std::size_t i = 0; i < paired_differences.size(); ++i) {
+    const std::vector<double>& d = paired_differences[i];
+    if (held_out[i] || d.size() < 2) continue;
+    const Summary s = summarize(d);
+    if (s.se() > 0) {
+      v.chi2 += (s.mean / s.se()) * (s.mean / s.se());
+    } else if (s.mean != 0) {
+      v.chi2 += 1e6;  // a deterministic shift
+    } else {
+      continue;  // identical runs: the step does not act on this point
+    }
+    ++v.dof;
+  }
+  v.p = v.dof > 0 ? 1 - chi_square_cdf(v.chi2, v.dof) : 1.0;
+  return v;
+}
+
 std::vector<int> rivals_of(const std::vector<double>& scores, double delta) {
   std::vector<int> out;
   if (scores.empty()) return out;

@@ -62,4 +62,17 @@ ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_par
 // chi2 + k ln n (lower is better).
 double bic(double chi2, int parameters, int points);
 
+// Whether a step moved the model beyond its noise: chi^2 of the per-point mean paired differences
+// (moved - base replicate pairs) over their standard errors, on the fitted points. A point where
+// every pair is identical is one the step does not act on (a corner radius on a board without an
+// obstruction runs the same scenario twice): it carries no information and is no degree of
+// freedom. A deterministic shift (identical differences, not zero) counts as a huge chi^2.
+struct Visibility {
+  double chi2 = 0;
+  int dof = 0;
+  double p = 1;  // P(chi^2_dof > chi2); 1 without degrees of freedom
+};
+Visibility step_visibility(const std::vector<std::vector<double>>& paired_differences,
+                           const std::vector<bool>& held_out);
+
 }  // namespace gapflow

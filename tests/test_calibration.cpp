@@ -79,6 +79,27 @@ TEST(Attribution, CollinearSignaturesFormOneGroup) {
   EXPECT_GT(abs_cosine(a, b), 0.99);
 }
 
+// A step that acts on 4 of 32 fitted points (a corner radius: only the points with an obstruction)
+// must be judged on those 4: the 28 points whose paired runs are identical are no degrees of
+// freedom. Counted, they turned a clear signal (chi^2 ~ 50 on 4 points) into p ~ 0.02.
+TEST(Attribution, PointsAStepDoesNotActOnAreNoDegreesOfFreedom) {
+  std::vector<std::vector<double>> d(32, std::vector<double>(18, 0.0));  // identical runs
+  std::vector<bool> held_out(32, false);
+  for (int i = 0; i < 4; ++i)
+    for (int r = 0; r < 18; ++r) d[i][r] = 1.0 + 0.5 * ((r % 3) - 1.0);  // mean 1, se ~0.1
+  const Visibility v = step_visibility(d, held_out);
+  EXPECT_EQ(v.dof, 4);
+  EXPECT_GT(v.chi2, 40.0);
+  EXPECT_LT(v.p, 1e-6);
+  held_out[0] = true;  // held-out points never count
+  EXPECT_EQ(step_visibility(d, held_out).dof, 3);
+  d[5] = std::vector<double>(18, 0.25);  // a deterministic shift is a degree of freedom, and decisive
+  EXPECT_EQ(step_visibility(d, held_out).dof, 4);
+  EXPECT_GT(step_visibility(d, held_out).chi2, 1e5);
+  EXPECT_EQ(step_visibility(std::vector<std::vector<double>>(3, std::vector<double>(6, 0.0)),
+                            std::vector<bool>(3, false)).p, 1.0);  // acts nowhere: not visible
+}
+
 TEST(Attribution, RivalsAreTheCandidatesWithinDeltaOfTheBest) {
   EXPECT_EQ(rivals_of({14.2, 18.4, 15.1, 17.5, 11.0}, 3.84), (std::vector<int>{1, 2, 3}));
   EXPECT_EQ(rivals_of({5.0}, 3.84), (std::vector<int>{0}));
