@@ -66,10 +66,9 @@ HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Eva
   // common seeds, and at the file's replicate count their noise was as large as the data's own
   // (blind study pass 4, commit 8b8781f: a planted size scatter with BIC 55.6 -> 34.5 was rejected
   // for 29.5 -> 35.2 on 12 points).
-  std::vector<bool> held(data.points.size());
-  for (std::size_t i = 0; i < held.size(); ++i) held[i] = data.points[i].held_out;
   const std::vector<Prediction> p = ev.evaluate({before, after}, data.seed + def.decision_seed_offset,
-                                                data.model_replicates * def.keep_test_replicate_factor, held);
+                                                data.model_replicates * def.keep_test_replicate_factor,
+                                                data.held_out_flags());
   c.before = chi2_of(data, p[0], true);
   c.after = chi2_of(data, p[1], true);
   return c;
@@ -277,17 +276,15 @@ class Loop {
       const EffectDef& e = *find_effect(cand.effect);
       std::vector<double> slope, slope_se;
       std::vector<std::vector<double>> diffs;
-      std::vector<bool> held_out;
       for (std::size_t i = 0; i < data_.points.size(); ++i) {
         diffs.push_back(paired_differences(moved, k * base.nodes.size(), base, i, cand.step));
         const Summary s = summarize(diffs.back());
         slope.push_back(diffs.back().size() >= 2 ? s.mean : 0.0);
         slope_se.push_back(diffs.back().size() >= 2 ? s.se() : 0.0);
-        held_out.push_back(data_.points[i].held_out);
       }
       // Pass 5 of the blind study lost both corner-rounding twins here: the 28 fitted points
       // without an obstruction (identical runs) counted as degrees of freedom beside the 4 with it.
-      const Visibility v = step_visibility(diffs, held_out);
+      const Visibility v = step_visibility(diffs, data_.held_out_flags());
       EffectTerm t = EffectTerm::single_step(e.name, e.key, cand.neutral, e.lo, e.hi, cand.step, slope, slope_se);
       cand.signature = t.slope;
       cand.signature_chi2 = v.chi2;

@@ -421,4 +421,10 @@ std::size_t DataFile::fitted_count() const {
   return n;
 }
 
+std::vector<bool> DataFile::held_out_flags() const {
+  std::vector<bool> out;
+  for (const DataPoint& p : points) out.push_back(p.held_out);
+  return out;
+}
+
 }  // namespace gapflow

@@ -107,6 +107,7 @@ struct DataFile {
   // A short label of point i ("W_over_d=4.5, shape=V").
   std::string point_label(std::size_t i) const;
   std::size_t fitted_count() const;
+  std::vector<bool> held_out_flags() const;  // one per point: the points mask of the held-out ones
   // Design points that need runs of their own (points measuring other observables on the same runs count once).
   std::size_t distinct_runs_per_replicate() const;
   // Whether points measure more than one observable (reports then name each point's).

@@ -23,9 +23,13 @@ seed_offset=${3:-0}
 gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 design=data/blind/design.toml
 mkdir -p "$out/twins" "$out/truth"
-# Twins and summaries of one seed offset must not be mixed with another's.
-if [[ -f $out/seed_offset && $(cat "$out/seed_offset") != "$seed_offset" ]]; then
-  echo "error: $out was made with seed offset $(cat "$out/seed_offset"), not $seed_offset; use another OUT" >&2
+# Twins and summaries of one seed offset must not be mixed with another's (an OUT with twins and
+# no record was made before the offset existed: offset 0).
+recorded=""
+if [[ -f $out/seed_offset ]]; then recorded=$(cat "$out/seed_offset")
+elif compgen -G "$out/twins/*.toml" > /dev/null; then recorded=0; fi
+if [[ -n $recorded && $recorded != "$seed_offset" ]]; then
+  echo "error: $out was made with seed offset $recorded, not $seed_offset; use another OUT" >&2
   exit 2
 fi
 echo "$seed_offset" > "$out/seed_offset"

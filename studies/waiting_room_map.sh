@@ -31,6 +31,8 @@ status=0
 trap 'echo "interrupted: writing the checkpoint $slim" >&2' INT  # a handler, not '': gapflow keeps its Ctrl-C
 /usr/bin/time -a -f "%e s wall, %U s user CPU: screen and check" -o "$out/map.time" \
   "$gapflow" study "$study" --quick --jobs "$jobs" || status=$?
-/usr/bin/python3 scripts/slim_store.py "$store" "$slim"  # also after an interruption: the checkpoint
+if [[ -e $store ]]; then  # also after an interruption: the checkpoint
+  /usr/bin/python3 scripts/slim_store.py "$store" "$slim"
+fi
 [[ $status == 0 ]] || exit "$status"
 "$gapflow" report "$store" --study "$study" --quick --out "$out"
