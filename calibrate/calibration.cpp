@@ -470,10 +470,11 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
       if (t.effect == e.name) trial.effects.push_back(t);
     loop.refine(trial.effects.back(), *best, base);
     const ParameterSet start_at = state.params.with(e.key, std::clamp(best->neutral + best->score.estimate, e.lo, e.hi));
-    const ParameterSet fitted = fit_surface(data, trial, start_at);
     const int k_after = n_free + static_cast<int>(trial.effects.size());
+    const EffectFit effect_fit = fit_effect(data, trial, start_at, trial.effects.size() - 1, k_after);
+    const ParameterSet& fitted = effect_fit.params;
+    const ProfileInterval& interval = effect_fit.interval;
     ModelState after = make_state(data, fitted, trial.predict(fitted, data), k_after);
-    const ProfileInterval interval = profile_interval(data, trial, fitted, trial.effects.size() - 1, k_after);
     const bool bic_better = after.bic < state.bic;
     // The held-out test by direct simulation, not on the surface: both parameter sets run
     // on seeds of their own (common to both, so that their difference is not the packing;

@@ -23,6 +23,17 @@ double chi2_of(const DataFile& data, const Prediction& p, bool held_out) {
   return chi2;
 }
 
+double deviance_of(const DataFile& data, const Prediction& p) {
+  double d = 0;
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    if (data.points[i].held_out) continue;
+    const double sigma = p.valid[i] ? total_sigma(data, p, i) : data.fit_se(i);
+    const double w = p.valid[i] ? (data.fit_value(i) - p.fit[i]) / sigma : 10.0;
+    d += w * w + 2 * std::log(sigma);
+  }
+  return d;
+}
+
 namespace {
 
 // Quadratic basis in the scaled coordinates: 1, x_k, x_k x_l (k <= l).
@@ -223,7 +234,7 @@ ParameterSet fit_surface(const DataFile& data, const Surface& s, const Parameter
     const auto& c = *static_cast<Ctx*>(raw);
     ParameterSet p = *c.start;
     for (std::size_t k = 0; k < xv.size(); ++k) p = p.with((*c.vars)[k].key, xv[k]);
-    return chi2_of(*c.data, c.s->predict(p, *c.data));
+    return deviance_of(*c.data, c.s->predict(p, *c.data));
   };
   opt.set_min_objective(f, &ctx);
   double value = 0;
@@ -236,33 +247,72 @@ ParameterSet fit_surface(const DataFile& data, const Surface& s, const Parameter
   return out;
 }
 
-ProfileInterval profile_interval(const DataFile& data, const Surface& s, const ParameterSet& fitted, std::size_t e,
-                                 int fitted_parameters) {
-  const EffectTerm& t = s.effects[e];
+namespace {
+
+struct ProfileScan {
+  std::vector<double> value, deviance, chi2;
+  std::vector<ParameterSet> params;  // everything else minimised at each value
+  std::size_t best = 0;
+};
+
+ProfileScan scan_profile(const DataFile& data, const Surface& s, const ParameterSet& fitted, const EffectTerm& t) {
   constexpr int kSteps = 80;
-  std::vector<double> a, chi2;
+  ProfileScan out;
   for (int k = 0; k <= kSteps; ++k) {
     const double v = t.lo + (t.hi - t.lo) * k / kSteps;
-    const ParameterSet p = fit_surface(data, s, fitted.with(t.key, v), t.key);
-    a.push_back(v);
-    chi2.push_back(chi2_of(data, s.predict(p, data)));
+    out.params.push_back(fit_surface(data, s, fitted.with(t.key, v), t.key));
+    out.value.push_back(v);
+    const Prediction p = s.predict(out.params.back(), data);
+    out.deviance.push_back(deviance_of(data, p));
+    out.chi2.push_back(chi2_of(data, p));
   }
-  const double at_fit = chi2_of(data, s.predict(fitted, data));
-  const std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
-  const double minimum = std::min(at_fit, chi2[best]);
-  const double nu = std::max(1.0, static_cast<double>(data.fitted_count()) - fitted_parameters);
-  const double limit = minimum + 3.841458820694124 * std::max(1.0, minimum / nu);
+  out.best = static_cast<std::size_t>(std::min_element(out.deviance.begin(), out.deviance.end()) - out.deviance.begin());
+  return out;
+}
+
+// The values whose deviance is within 3.84 x max(1, chi2/nu) of the minimum (the chi^2
+// scale inflates the limit when the fit is poor).
+ProfileInterval interval_of(const ProfileScan& scan, double minimum, double chi2_per_dof) {
+  const std::vector<double>& a = scan.value;
+  const std::vector<double>& dev = scan.deviance;
+  const double limit = minimum + 3.841458820694124 * std::max(1.0, chi2_per_dof);
   ProfileInterval out;
-  std::size_t l = best, h = best;
-  while (l > 0 && chi2[l - 1] <= limit) --l;
-  while (h + 1 < chi2.size() && chi2[h + 1] <= limit) ++h;
+  std::size_t l = scan.best, h = scan.best;
+  while (l > 0 && dev[l - 1] <= limit) --l;
+  while (h + 1 < dev.size() && dev[h + 1] <= limit) ++h;
   auto crossing = [&](std::size_t in, std::size_t outside) {  // linear interpolation of the limit
-    return a[in] + (a[outside] - a[in]) * (limit - chi2[in]) / (chi2[outside] - chi2[in]);
+    return a[in] + (a[outside] - a[in]) * (limit - dev[in]) / (dev[outside] - dev[in]);
   };
   out.bounded_lo = l > 0;
-  out.bounded_hi = h + 1 < chi2.size();
+  out.bounded_hi = h + 1 < dev.size();
   out.lo = out.bounded_lo ? crossing(l, l - 1) : a[l];
   out.hi = out.bounded_hi ? crossing(h, h + 1) : a[h];
+  return out;
+}
+
+}  // namespace
+
+EffectFit fit_effect(const DataFile& data, const Surface& s, const ParameterSet& start, std::size_t e,
+                     int fitted_parameters) {
+  const EffectTerm& t = s.effects[e];
+  EffectFit out;
+  out.params = fit_surface(data, s, start);
+  double at_fit = deviance_of(data, s.predict(out.params, data));
+  const ProfileScan scan = scan_profile(data, s, out.params, t);
+  // The response is piecewise linear in the effect's size, so the deviance has kinks at the
+  // measured sizes, and BOBYQA from one start can stop at one. The scan is a global search
+  // over the effect's range: the fit restarts from its best point when that is lower.
+  const double scan_best = scan.deviance[scan.best];
+  if (scan_best < at_fit) {
+    const ParameterSet again = fit_surface(data, s, scan.params[scan.best]);
+    const double again_deviance = deviance_of(data, s.predict(again, data));
+    out.params = again_deviance < scan_best ? again : scan.params[scan.best];
+    at_fit = std::min(again_deviance, scan_best);
+    out.restarted = true;
+  }
+  const double nu = std::max(1.0, static_cast<double>(data.fitted_count()) - fitted_parameters);
+  const double chi2_per_dof = chi2_of(data, s.predict(out.params, data)) / nu;
+  out.interval = interval_of(scan, std::min(at_fit, scan_best), chi2_per_dof);
   return out;
 }
 
