@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Issue 18's waiting-room map: the racing screen of studies/paper/waiting_room_map.toml on its
 # --quick grid (every third value of each axis, first and last kept: 3 sizes per shape, D/d 0, 2,
-# 7, 20, W/d 3, 5, 6), 2D with the rolling contact, then its 3D check; the report goes to OUT.
+# 7, 20, W/d 3, 4.26 (the paper's 33 mm), 6), 2D with the rolling contact, then its 3D check; the report goes to OUT.
 #
 #   studies/waiting_room_map.sh [OUT] [JOBS]     (default results/waiting-room-map, all cores)
 #
