@@ -75,8 +75,8 @@ ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_par
   return c;
 }
 
-double bic(double chi2, int parameters, int points) {
-  return chi2 + parameters * std::log(static_cast<double>(points));
+double bic(double minus_two_log_likelihood, int parameters, int points) {
+  return minus_two_log_likelihood + parameters * std::log(static_cast<double>(points));
 }
 
 Visibility step_visibility(const std::vector<std::vector<double>>& paired_differences,

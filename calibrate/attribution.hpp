@@ -58,9 +58,9 @@ struct ChiSquare {
 };
 ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_parameters);
 
-// Bayesian information criterion for Gaussian errors of known scale:
-// chi2 + k ln n (lower is better).
-double bic(double chi2, int parameters, int points);
+// Bayesian information criterion for Gaussian errors: -2 ln L + k ln n (lower is better);
+// with errors of known scale, -2 ln L is chi^2 up to a constant.
+double bic(double minus_two_log_likelihood, int parameters, int points);
 
 // Whether a step moved the model beyond its noise: chi^2 of the per-point mean paired differences
 // (moved - base replicate pairs) over their standard errors, on the fitted points. A point where

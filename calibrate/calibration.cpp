@@ -152,7 +152,7 @@ ModelState make_state(const DataFile& data, const ParameterSet& params, const Pr
   s.whitened = whitened_residual(data, p);
   s.fitted = measure(data, p, false, fitted_parameters);
   s.held_out = measure(data, p, true, fitted_parameters);
-  s.bic = bic(s.fitted.chi.chi2, fitted_parameters, s.fitted.n);
+  s.bic = bic(deviance_of(data, p), fitted_parameters, s.fitted.n);  // the fits' objective, not chi^2 (fit.hpp)
   return s;
 }
 

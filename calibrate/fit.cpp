@@ -166,8 +166,13 @@ double EffectTerm::response(std::size_t i, double da, double& variance) const {
   while (k + 2 < offsets.size() && da > offsets[k + 1]) ++k;
   const double w = (da - offsets[k]) / (offsets[k + 1] - offsets[k]);
   const double a = shift[k][i], b = shift[k + 1][i];
-  const double sa = shift_se[k][i] * (1 - w), sb = shift_se[k + 1][i] * w;
-  variance = sa * sa + sb * sb;
+  // The two sizes' errors are correlated (their paired runs share the neutral ones), so the
+  // variance of the interpolant lies between the independent case's (1-w)^2 va + w^2 vb, which
+  // dips to half at mid-segment, and the fully correlated ((1-w) sa + w sb)^2. Between the sizes
+  // (1-w) va + w vb bounds both and does not dip (a dip would make the fit prefer mid-segments,
+  // or, on chi^2 alone, the sizes); beyond the end sizes the independent case's grows faster.
+  const double va = shift_se[k][i] * shift_se[k][i], vb = shift_se[k + 1][i] * shift_se[k + 1][i];
+  variance = std::max((1 - w) * va + w * vb, (1 - w) * (1 - w) * va + w * w * vb);
   return a + w * (b - a);
 }
 
@@ -250,9 +255,9 @@ ParameterSet fit_surface(const DataFile& data, const Surface& s, const Parameter
 namespace {
 
 struct ProfileScan {
-  std::vector<double> value, deviance, chi2;
+  std::vector<double> value, deviance;
   std::vector<ParameterSet> params;  // everything else minimised at each value
-  std::size_t best = 0;
+  std::size_t best = 0;              // lowest deviance
 };
 
 ProfileScan scan_profile(const DataFile& data, const Surface& s, const ParameterSet& fitted, const EffectTerm& t) {
@@ -262,27 +267,30 @@ ProfileScan scan_profile(const DataFile& data, const Surface& s, const Parameter
     const double v = t.lo + (t.hi - t.lo) * k / kSteps;
     out.params.push_back(fit_surface(data, s, fitted.with(t.key, v), t.key));
     out.value.push_back(v);
-    const Prediction p = s.predict(out.params.back(), data);
-    out.deviance.push_back(deviance_of(data, p));
-    out.chi2.push_back(chi2_of(data, p));
+    out.deviance.push_back(deviance_of(data, s.predict(out.params.back(), data)));
   }
   out.best = static_cast<std::size_t>(std::min_element(out.deviance.begin(), out.deviance.end()) - out.deviance.begin());
   return out;
 }
 
-// The values whose deviance is within 3.84 x max(1, chi2/nu) of the minimum (the chi^2
-// scale inflates the limit when the fit is poor).
-ProfileInterval interval_of(const ProfileScan& scan, double minimum, double chi2_per_dof) {
-  const std::vector<double>& a = scan.value;
-  const std::vector<double>& dev = scan.deviance;
-  const double limit = minimum + 3.841458820694124 * std::max(1.0, chi2_per_dof);
-  ProfileInterval out;
-  std::size_t l = scan.best, h = scan.best;
+// The connected range of values around the estimate (value a0, deviance d0: the minimum)
+// whose deviance is within 3.84 x max(1, chi2/nu) of d0 (the chi^2 scale widens the limit
+// when the fit is poor). The estimate joins the scan's values, so the range holds it even
+// when its well is narrower than the scan's spacing.
+ProfileInterval interval_around(const ProfileScan& scan, double a0, double d0, double chi2_per_dof) {
+  std::vector<double> a = scan.value, dev = scan.deviance;
+  const auto at = static_cast<std::size_t>(std::lower_bound(a.begin(), a.end(), a0) - a.begin());
+  a.insert(a.begin() + static_cast<std::ptrdiff_t>(at), a0);
+  dev.insert(dev.begin() + static_cast<std::ptrdiff_t>(at), d0);
+  const double limit = d0 + 3.841458820694124 * std::max(1.0, chi2_per_dof);
+  std::size_t l = at, h = at;
   while (l > 0 && dev[l - 1] <= limit) --l;
   while (h + 1 < dev.size() && dev[h + 1] <= limit) ++h;
-  auto crossing = [&](std::size_t in, std::size_t outside) {  // linear interpolation of the limit
+  // dev[in] <= limit < dev[outside]: the crossing lies between them.
+  auto crossing = [&](std::size_t in, std::size_t outside) {
     return a[in] + (a[outside] - a[in]) * (limit - dev[in]) / (dev[outside] - dev[in]);
   };
+  ProfileInterval out;
   out.bounded_lo = l > 0;
   out.bounded_hi = h + 1 < dev.size();
   out.lo = out.bounded_lo ? crossing(l, l - 1) : a[l];
@@ -298,21 +306,25 @@ EffectFit fit_effect(const DataFile& data, const Surface& s, const ParameterSet&
   EffectFit out;
   out.params = fit_surface(data, s, start);
   double at_fit = deviance_of(data, s.predict(out.params, data));
-  const ProfileScan scan = scan_profile(data, s, out.params, t);
+  ProfileScan scan = scan_profile(data, s, out.params, t);
   // The response is piecewise linear in the effect's size, so the deviance has kinks at the
   // measured sizes, and BOBYQA from one start can stop at one. The scan is a global search
-  // over the effect's range: the fit restarts from its best point when that is lower.
-  const double scan_best = scan.deviance[scan.best];
-  if (scan_best < at_fit) {
+  // over the effect's range: the fit restarts from its best point when that is lower, and the
+  // profile is scanned again from there (its re-fits started from the local minimum).
+  if (scan.deviance[scan.best] < at_fit) {
     const ParameterSet again = fit_surface(data, s, scan.params[scan.best]);
     const double again_deviance = deviance_of(data, s.predict(again, data));
-    out.params = again_deviance < scan_best ? again : scan.params[scan.best];
-    at_fit = std::min(again_deviance, scan_best);
+    const bool better = again_deviance < scan.deviance[scan.best];
+    out.params = better ? again : scan.params[scan.best];
+    at_fit = better ? again_deviance : scan.deviance[scan.best];
     out.restarted = true;
+    scan = scan_profile(data, s, out.params, t);
   }
   const double nu = std::max(1.0, static_cast<double>(data.fitted_count()) - fitted_parameters);
   const double chi2_per_dof = chi2_of(data, s.predict(out.params, data)) / nu;
-  out.interval = interval_of(scan, std::min(at_fit, scan_best), chi2_per_dof);
+  // A second scan can find a still lower point; the interval is the estimate's (its
+  // deviance is the minimum the limit counts from).
+  out.interval = interval_around(scan, out.params.get(t.key, t.neutral), at_fit, chi2_per_dof);
   return out;
 }
 
@@ -374,7 +386,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return distance(nodes[a]) < distance(nodes[b]); });
   for (std::size_t k = 0; k < std::min<std::size_t>(3, order.size()); ++k)
     out.nodes.push_back(nodes[order[k]]), out.node_predictions.push_back(node_preds[order[k]]);
-  say(fmt::format("  response surface through {} node(s); its minimum: {} (chi2 = {:.2f})", nodes.size(),
+  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f})", nodes.size(),
                   out.params.label(), chi2_of(data, out.surface.predict(out.params, data))));
   return out;
 }

@@ -9,8 +9,9 @@
 // prediction (fit scale) is regressed on the free parameters over a grid of
 // nodes (a quadratic, weighted by each node's standard error), and each effect
 // adds a linear term whose slope is measured by finite differences at the nodes
-// next to the fit, under common random numbers. chi^2 of the surface is smooth;
-// NLopt's BOBYQA minimises it, and profiles are exact on it. Every fitted state
+// next to the fit, under common random numbers. The surface is smooth (between an
+// effect's measured sizes); NLopt's BOBYQA minimises its deviance (below), and profiles
+// are exact on it. Every fitted state
 // is then re-scored by direct simulation on fresh seeds.
 #pragma once
 
@@ -33,10 +34,9 @@ double total_sigma(const DataFile& data, const Prediction& p, std::size_t i);
 double chi2_of(const DataFile& data, const Prediction& p, bool held_out = false);
 // The fits' objective: -2 ln(Gaussian likelihood) over the fitted points up to a constant,
 // chi^2 + sum 2 ln(sigma_i). The surface's sigma_i depends on the parameters (an effect's
-// response carries the noise of its finite differences, more between and beyond the measured
-// sizes than at them), and chi^2 alone falls where that noise rises: minimised, it was drawn
-// to wherever the model is least certain (pass 5's restitution-low: chi^2 40.7 at the measured
-// size 0.3, 29.9 at 0, extrapolated).
+// response carries the noise of its finite differences, growing beyond the measured sizes),
+// and chi^2 alone falls where that noise rises: minimised, it is drawn to wherever the model
+// is least certain (tests/test_calibration_fit.cpp). BIC is taken on it too.
 double deviance_of(const DataFile& data, const Prediction& p);
 
 // An effect term of the surface: the shift of every point's fit-scale value when
@@ -105,10 +105,11 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
 ParameterSet fit_surface(const DataFile& data, const Surface& s, const ParameterSet& start, const std::string& fixed = "");
 
 // Fit of effect term `e` of the surface with the free parameters, and its profile
-// interval: the values whose deviance, minimised over everything else, is within
-// 3.84 x max(1, chi2/nu) of the minimum. The profile is scanned over the effect's whole
-// range, and the fit restarts from the scan's best point when that is lower than where
-// BOBYQA stopped (chi^2 has kinks at the measured sizes), so the interval holds the estimate.
+// interval: the connected range of values around the estimate whose deviance, minimised
+// over everything else, is within 3.84 x max(1, chi2/nu) of the estimate's. The profile is
+// scanned at 81 values over the effect's whole range, and the fit restarts from the scan's
+// best point when that is lower than where BOBYQA stopped (the deviance has kinks at the
+// measured sizes).
 struct ProfileInterval {
   double lo = 0, hi = 0;
   bool bounded_lo = true, bounded_hi = true;  // false: the range's end was reached
@@ -116,7 +117,7 @@ struct ProfileInterval {
 struct EffectFit {
   ParameterSet params;       // free parameters and every effect's size
   ProfileInterval interval;  // of effect e
-  bool restarted = false;    // the scan found a lower chi^2 than the first fit
+  bool restarted = false;    // the scan found a lower deviance than the first fit
 };
 EffectFit fit_effect(const DataFile& data, const Surface& s, const ParameterSet& start, std::size_t e,
                      int fitted_parameters);

@@ -1,9 +1,12 @@
-// The effect fit on a response surface: its objective and its restart from the profile scan.
+// The effect fit on a response surface: its objective, its restart from the profile scan
+// and its interval.
 #include "calibrate/data_file.hpp"
 #include "calibrate/fit.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+
+#include <fmt/format.h>
 
 #include <cmath>
 
@@ -12,28 +15,31 @@ namespace {
 
 using testing::source_path;
 
-// Two points of a linear-scale observable, both measured at 0.95 +- 0.05.
-DataFile two_points() {
+// Two points of a linear-scale observable, measured at y0 and y1 with standard error se.
+DataFile two_points(double y0, double y1, double se) {
   const std::string head =
       testing::data_file_head("set = [\"particles.count=30\", \"run.time_limit_s=10\"]\nreplicates = 2\n");
-  const std::string points =
-      "[[point]]\nW_over_d = 4\nobservable = \"exit_offset\"\nvalue = 0.95\nuncertainty = 0.05\n"
-      "[[point]]\nW_over_d = 5\nobservable = \"exit_offset\"\nvalue = 0.95\nuncertainty = 0.05\n";
+  const std::string points = fmt::format(
+      "[[point]]\nW_over_d = 4\nobservable = \"exit_offset\"\nvalue = {}\nuncertainty = {}\n"
+      "[[point]]\nW_over_d = 5\nobservable = \"exit_offset\"\nvalue = {}\nuncertainty = {}\n",
+      y0, se, y1, se);
   return parse_data_file(head + points, "t.toml", source_path(""));
 }
 
-// A surface without free parameters, 0 at both points, and one effect of size 0..3
-// measured at 0, 1, 2, 3 with the shifts given per size (both points' se `se`).
-Surface flat_surface_with(const std::vector<std::vector<double>>& shifts, double se) {
+// A surface without free parameters, 0 at both points, and one effect of size 0..3 (neutral
+// 0) measured at `sizes` (the first is its step) with the two points' shifts given per size,
+// each with standard error se.
+Surface flat_surface_with(const std::vector<double>& sizes, const std::vector<std::vector<double>>& shifts, double se) {
   Surface s;
   for (int i = 0; i < 2; ++i) {
     s.coef.push_back(Eigen::VectorXd::Zero(1));
     s.cov.push_back(Eigen::MatrixXd::Zero(1, 1));
     s.valid.push_back(true);
   }
-  EffectTerm t = EffectTerm::single_step("e", "k", 0.0, 0.0, 3.0, 1.0, shifts[0], {se, se});
-  t.add_size(2.0, shifts[1], {se, se});
-  t.add_size(3.0, shifts[2], {se, se});
+  const double step = sizes[0];
+  EffectTerm t = EffectTerm::single_step("e", "k", 0.0, 0.0, 3.0, step, {shifts[0][0] / step, shifts[0][1] / step},
+                                         {se / step, se / step});
+  for (std::size_t k = 1; k < sizes.size(); ++k) t.add_size(sizes[k], shifts[k], {se, se});
   s.effects.push_back(t);
   return s;
 }
@@ -42,8 +48,8 @@ TEST(EffectFit, RestartsFromTheProfilesBestWhenTheFirstFitStopsAtAKink) {
   // Point 0 responds 0, 1, 0.5, 1 at sizes 0..3, point 1 0, 0.6, 0.5, 1: both reach the data
   // (0.95) only at size 2.9; on the first segment they cannot both, and size 1 is a kink
   // where the deviance has a local minimum (it falls toward 1 from below and rises after it).
-  const DataFile data = two_points();
-  const Surface s = flat_surface_with({{1.0, 0.6}, {0.5, 0.5}, {1.0, 1.0}}, 0.01);
+  const DataFile data = two_points(0.95, 0.95, 0.05);
+  const Surface s = flat_surface_with({1, 2, 3}, {{1.0, 0.6}, {0.5, 0.5}, {1.0, 1.0}}, 0.01);
   const ParameterSet start = ParameterSet{}.with("k", 0.5);
   const double local = fit_surface(data, s, start).get("k", -1);
   EXPECT_NEAR(local, 1.0, 0.05) << "the set-up no longer has the local minimum this test is about";
@@ -52,7 +58,40 @@ TEST(EffectFit, RestartsFromTheProfilesBestWhenTheFirstFitStopsAtAKink) {
   EXPECT_NEAR(fit.params.get("k", -1), 2.9, 0.01);
   EXPECT_LE(fit.interval.lo, fit.params.get("k", -1));
   EXPECT_GE(fit.interval.hi, fit.params.get("k", -1));
-  EXPECT_GT(fit.interval.lo, 2.0);  // size 1 is far outside: deviance 50 above the minimum
+  EXPECT_GT(fit.interval.lo, 2.0);  // size 1 is far outside: deviance ~48 above the minimum
+}
+
+TEST(EffectFit, TheDevianceIsNotDrawnToWhereTheModelIsLeastCertain) {
+  // Data 0.0 and 0.2 (+- 0.05); the effect moves both points by 0.1 per unit of size, measured
+  // at one step (size 1) with se 0.1, so its variance grows as 0.01 k^2 beyond it. Least
+  // squares with the model's se held fixed puts the size at 1 (mean shift 0.1). chi^2 alone
+  // falls as the model's uncertainty grows: 1.6 at size 1, 0.94 at 2. The deviance, chi^2 +
+  // sum ln sigma^2, has its minimum near 0.95.
+  const DataFile data = two_points(0.0, 0.2, 0.05);
+  const Surface s = flat_surface_with({1}, {{0.1, 0.1}}, 0.1);
+  double chi2_best = 1e300, at = -1;
+  for (int k = 0; k <= 300; ++k) {
+    const double v = k / 100.0;
+    const double c = chi2_of(data, s.predict(ParameterSet{}.with("k", v), data));
+    if (c < chi2_best) chi2_best = c, at = v;
+  }
+  EXPECT_GT(at, 1.6) << "chi^2 no longer prefers the uncertain sizes: the set-up lost its point";
+  const EffectFit fit = fit_effect(data, s, ParameterSet{}.with("k", 2.5), 0, 1);
+  EXPECT_NEAR(fit.params.get("k", -1), 0.95, 0.1);
+}
+
+TEST(EffectFit, TheIntervalHoldsAnEstimateWhoseWellIsNarrowerThanTheScan) {
+  // Both points respond 1 per unit of size (measured at 1, 2, 3 with se 1e-4) and sit at
+  // 1.53 +- 0.001: the well's half-width (~0.002) is far below the scan's spacing (3/80).
+  const DataFile data = two_points(1.53, 1.53, 0.001);
+  const Surface s = flat_surface_with({1, 2, 3}, {{1.0, 1.0}, {2.0, 2.0}, {3.0, 3.0}}, 1e-4);
+  const EffectFit fit = fit_effect(data, s, ParameterSet{}.with("k", 2.0), 0, 1);
+  const double k = fit.params.get("k", -1);
+  EXPECT_NEAR(k, 1.53, 1e-3);
+  EXPECT_LE(fit.interval.lo, k);
+  EXPECT_GE(fit.interval.hi, k);
+  EXPECT_LT(fit.interval.hi - fit.interval.lo, 0.05);
+  EXPECT_TRUE(fit.interval.bounded_lo && fit.interval.bounded_hi);
 }
 
 }  // namespace
