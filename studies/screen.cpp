@@ -174,18 +174,38 @@ void print_round(std::ostream& log, const RacingParams& p, const RaceState& s, i
                      per_decision_alpha(p, n_cells), kept, dropped);
 }
 
-// Counts jobs once, though each round lists the earlier rounds' replicates again (resume).
-void add_summary(RunnerSummary& total, const RunnerSummary& step, const std::vector<Job>& jobs,
-                 const std::set<std::string>& stored_before, std::set<std::string>& listed) {
-  for (const Job& j : jobs)
-    if (listed.insert(j.id.key).second) {
-      total.total += 1;
-      total.already_stored += stored_before.count(j.id.key) ? 1 : 0;
-    }
-  total.done_now += step.done_now;
-  total.failed.insert(total.failed.end(), step.failed.begin(), step.failed.end());
-  total.cancelled = step.cancelled;
-}
+// The runs a screen has asked for, counted once though each round lists the earlier
+// rounds' replicates again (resume).
+class Tally {
+ public:
+  explicit Tally(std::set<std::string> stored_before) : stored_before_(std::move(stored_before)) {}
+  void add(const RunnerSummary& step, const std::vector<Job>& jobs) {
+    for (const Job& j : jobs)
+      if (listed_.insert(j.id.key).second) {
+        total_.total += 1;
+        total_.already_stored += stored_before_.count(j.id.key) ? 1 : 0;
+      }
+    total_.done_now += step.done_now;
+    total_.failed.insert(total_.failed.end(), step.failed.begin(), step.failed.end());
+    total_.cancelled = step.cancelled;
+  }
+  const RunnerSummary& total() const { return total_; }
+
+ private:
+  const std::set<std::string> stored_before_;
+  std::set<std::string> listed_;
+  RunnerSummary total_;
+};
+
+// What every stage of a screen runs with.
+struct ScreenStage {
+  const StudyDef& study;
+  const ScreenGrid& grid;
+  Store& store;
+  const RunnerOptions& options;
+  const JobRunner& run;
+  std::ostream& log;
+};
 
 void log_stale_runs(std::ostream& log, int stale) {
   if (stale > 0)
@@ -195,23 +215,19 @@ void log_stale_runs(std::ostream& log, int stale) {
 }
 
 // The other model's check of the finished screen (studies/screen_check.hpp).
-RunnerSummary run_check(const StudyDef& study, const ScreenGrid& grid, Store& store, const RunnerOptions& options,
-                        const JobRunner& run, std::ostream& log, RunnerSummary total,
-                        const std::set<std::string>& stored_before, std::set<std::string>& listed) {
-  const ScreenDef& s = *study.screen;
-  const RaceInput in = screen_race_input(study, grid, store.load(study.name));
+void run_check(const ScreenStage& r, Tally& tally) {
+  const ScreenDef& s = *r.study.screen;
+  const RaceInput in = screen_race_input(r.study, r.grid, r.store.load(r.study.name));
   const auto picks = check_picks(s.racing, in, replay_race(s.racing, in), s.check_controls);
   if (!picks) throw std::logic_error("the screen's confirmation is stored but its picks are not decided");
   std::size_t above = 0;
   for (const CheckPick& p : *picks) above += p.role == CheckRole::above ? 1 : 0;
-  const std::vector<Job> jobs = check_jobs(study, grid, *picks);
-  log << fmt::format("screen check in {}: {} cells above J_0 and {} controls, {} fresh replicates each and per "
-                     "baseline (replicates {} to {}): {} jobs\n",
-                     to_string(*s.check_model), above, picks->size() - above, s.check_replicates,
-                     check_replicate_range(s).from, check_replicate_range(s).to - 1,
-                     jobs.size());
-  add_summary(total, run(jobs, store, options), jobs, stored_before, listed);
-  return total;
+  const std::vector<Job> jobs = check_jobs(r.study, r.grid, *picks);
+  r.log << fmt::format("screen check in {}: {} cells above J_0 and {} controls, {} fresh replicates each and per "
+                       "baseline (replicates {} to {}): {} jobs\n",
+                       to_string(*s.check_model), above, picks->size() - above, s.check_replicates,
+                       check_replicate_range(s).from, check_replicate_range(s).to - 1, jobs.size());
+  tally.add(r.run(jobs, r.store, r.options), jobs);
 }
 
 }  // namespace
@@ -224,9 +240,8 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
                      "{} + {} replicates up to {}, then {} confirmation replicates per survivor\n",
                      study.name, grid.cells.size(), grid.cells.size() - grid.raced.size(), grid.baselines.size(),
                      race_rounds(p), p.initial, p.step, p.max, p.confirm);
-  RunnerSummary total;
-  const std::set<std::string> stored_before = store.keys();
-  std::set<std::string> listed;
+  const ScreenStage r{study, grid, store, options, run, log};
+  Tally tally(store.keys());
   int printed = 0;
   for (int stage = 0; stage <= race_rounds(p) + 1; ++stage) {
     const std::vector<StoredRun> stored = store.load(study.name);
@@ -239,11 +254,12 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
       log << fmt::format("screen confirmation: {} jobs (fresh replicates {} to {})\n", jobs.size(), p.max,
                          p.max + p.confirm - 1);
     const RunnerSummary step = run(jobs, store, options);
-    add_summary(total, step, jobs, stored_before, listed);
-    if (step.cancelled || !step.failed.empty()) return total;
-    if (confirming) return study.screen->check_model ? run_check(study, grid, store, options, run, log, total,
-                                                                 stored_before, listed)
-                                                     : total;
+    tally.add(step, jobs);
+    if (step.cancelled || !step.failed.empty()) return tally.total();
+    if (confirming) {
+      if (study.screen->check_model) run_check(r, tally);
+      return tally.total();
+    }
   }
   throw std::runtime_error("the screen made no progress: a round's runs are stored but the race cannot decide it");
 }
