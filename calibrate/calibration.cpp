@@ -474,6 +474,9 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
     const EffectFit effect_fit = fit_effect(data, trial, start_at, trial.effects.size() - 1, k_after);
     const ParameterSet& fitted = effect_fit.params;
     const ProfileInterval& interval = effect_fit.interval;
+    if (effect_fit.restarted)
+      loop.say(fmt::format("{}: the first fit stopped at a local minimum; restarted from the profile scan's best value",
+                           e.name));
     ModelState after = make_state(data, fitted, trial.predict(fitted, data), k_after);
     const bool bic_better = after.bic < state.bic;
     // The held-out test by direct simulation, not on the surface: both parameter sets run

@@ -167,12 +167,13 @@ double EffectTerm::response(std::size_t i, double da, double& variance) const {
   const double w = (da - offsets[k]) / (offsets[k + 1] - offsets[k]);
   const double a = shift[k][i], b = shift[k + 1][i];
   // The two sizes' errors are correlated (their paired runs share the neutral ones), so the
-  // variance of the interpolant lies between the independent case's (1-w)^2 va + w^2 vb, which
-  // dips to half at mid-segment, and the fully correlated ((1-w) sa + w sb)^2. Between the sizes
-  // (1-w) va + w vb bounds both and does not dip (a dip would make the fit prefer mid-segments,
-  // or, on chi^2 alone, the sizes); beyond the end sizes the independent case's grows faster.
-  const double va = shift_se[k][i] * shift_se[k][i], vb = shift_se[k + 1][i] * shift_se[k + 1][i];
-  variance = std::max((1 - w) * va + w * vb, (1 - w) * (1 - w) * va + w * w * vb);
+  // interpolant's variance lies between the independent case's (1-w)^2 va + w^2 vb, which dips
+  // to half at mid-segment (a dip draws a fit to or away from the sizes), and the fully
+  // correlated ((1-w) sa + w sb)^2, which bounds it for any correlation, does not dip, and is
+  // exact next to neutral (sa = 0 there). Beyond the end sizes the independent case's is larger.
+  const double sa = shift_se[k][i], sb = shift_se[k + 1][i];
+  const double correlated = (1 - w) * sa + w * sb;
+  variance = std::max(correlated * correlated, (1 - w) * (1 - w) * sa * sa + w * w * sb * sb);
   return a + w * (b - a);
 }
 
@@ -273,7 +274,7 @@ ProfileScan scan_profile(const DataFile& data, const Surface& s, const Parameter
   return out;
 }
 
-// The connected range of values around the estimate (value a0, deviance d0: the minimum)
+// The connected range of values around the estimate (value a0, deviance d0)
 // whose deviance is within 3.84 x max(1, chi2/nu) of d0 (the chi^2 scale widens the limit
 // when the fit is poor). The estimate joins the scan's values, so the range holds it even
 // when its well is narrower than the scan's spacing.
@@ -322,8 +323,8 @@ EffectFit fit_effect(const DataFile& data, const Surface& s, const ParameterSet&
   }
   const double nu = std::max(1.0, static_cast<double>(data.fitted_count()) - fitted_parameters);
   const double chi2_per_dof = chi2_of(data, s.predict(out.params, data)) / nu;
-  // A second scan can find a still lower point; the interval is the estimate's (its
-  // deviance is the minimum the limit counts from).
+  // The second scan starts from the restarted fit and could, rarely, find a still lower point;
+  // the estimate is not moved again: the interval is the estimate's, counted from its deviance.
   out.interval = interval_around(scan, out.params.get(t.key, t.neutral), at_fit, chi2_per_dof);
   return out;
 }

@@ -8,7 +8,7 @@
 // optimiser had chased noise; calibrate/README.md). Instead, every point's
 // prediction (fit scale) is regressed on the free parameters over a grid of
 // nodes (a quadratic, weighted by each node's standard error), and each effect
-// adds a linear term whose slope is measured by finite differences at the nodes
+// adds a term, piecewise linear in its size, measured by finite differences at the nodes
 // next to the fit, under common random numbers. The surface is smooth (between an
 // effect's measured sizes); NLopt's BOBYQA minimises its deviance (below), and profiles
 // are exact on it. Every fitted state
@@ -64,7 +64,7 @@ struct EffectTerm {
   double response(std::size_t i, double da, double& variance) const;
 };
 
-// The model near the fit: quadratic in the free parameters, linear in effects.
+// The model near the fit: quadratic in the free parameters, piecewise linear in each effect's size, additive.
 struct Surface {
   std::vector<std::string> keys;      // free parameters
   std::vector<double> centre, half;   // x' = (x - centre)/half in [-1, 1] over the nodes

@@ -119,9 +119,9 @@ TEST(EffectTermResponse, InterpolatesMeasuredSizesAndExtendsTheEndSegments) {
   EXPECT_NEAR(t.response(0, 0.0, var), 0.0, 1e-12);
   EXPECT_NEAR(var, 0.0, 1e-12);  // neutral: no shift, no uncertainty
   EXPECT_NEAR(t.response(0, 1.0, var), 1.0, 1e-12);
-  EXPECT_NEAR(var, 0.5 * std::pow(0.2, 2), 1e-12);  // halfway to the step (se 0.1 x 2): variance linear
+  EXPECT_NEAR(var, std::pow(0.5 * 0.2, 2), 1e-12);  // halfway to the step (se 0.1 x 2; 0 at neutral)
   EXPECT_NEAR(t.response(0, 3.0, var), 2.5, 1e-12);
-  EXPECT_NEAR(var, std::pow(0.2, 2), 1e-12);          // between sizes of equal se: no dip
+  EXPECT_NEAR(var, std::pow(0.2, 2), 1e-12);          // between sizes of equal se: no dip (independent: half)
   EXPECT_NEAR(t.response(0, 6.0, var), 4.0, 1e-12);    // beyond the last size: slope of 2 -> 4
   EXPECT_NEAR(var, 0.04 + 4 * 0.04, 1e-12);            // extrapolated: (1-w)^2 va + w^2 vb at w = 2
   EXPECT_NEAR(t.response(0, -0.5, var), -1.0, 1e-12);
