@@ -13,11 +13,26 @@ double total_sigma(const DataFile& data, const Prediction& p, std::size_t i) {
   return std::hypot(data.fit_se(i), p.se_fit[i]);
 }
 
+namespace {
+
+// One point's whitened residual and its total sigma; an invalid model point counts as 10
+// sigma (with the data's own sigma).
+struct PointResidual {
+  double whitened, sigma;
+};
+PointResidual point_residual(const DataFile& data, const Prediction& p, std::size_t i) {
+  if (!p.valid[i]) return {10.0, data.fit_se(i)};
+  const double sigma = total_sigma(data, p, i);
+  return {(data.fit_value(i) - p.fit[i]) / sigma, sigma};
+}
+
+}  // namespace
+
 double chi2_of(const DataFile& data, const Prediction& p, bool held_out) {
   double chi2 = 0;
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     if (data.points[i].held_out != held_out) continue;
-    const double w = p.valid[i] ? (data.fit_value(i) - p.fit[i]) / total_sigma(data, p, i) : 10.0;
+    const double w = point_residual(data, p, i).whitened;
     chi2 += w * w;
   }
   return chi2;
@@ -27,9 +42,8 @@ double deviance_of(const DataFile& data, const Prediction& p) {
   double d = 0;
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     if (data.points[i].held_out) continue;
-    const double sigma = p.valid[i] ? total_sigma(data, p, i) : data.fit_se(i);
-    const double w = p.valid[i] ? (data.fit_value(i) - p.fit[i]) / sigma : 10.0;
-    d += w * w + 2 * std::log(sigma);
+    const PointResidual r = point_residual(data, p, i);
+    d += r.whitened * r.whitened + 2 * std::log(r.sigma);
   }
   return d;
 }

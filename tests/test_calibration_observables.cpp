@@ -129,13 +129,25 @@ TEST(EffectTermResponse, InterpolatesMeasuredSizesAndExtendsTheEndSegments) {
   EXPECT_NEAR(t.slope[0], 1.0, 1e-12);                 // the signature stays the first step's
 }
 
+// kFourPoints with an evaluator on a store of its own, 2 workers (members in that order:
+// the evaluator keeps references to the data file and the store).
+struct FourPointEvaluator {
+  explicit FourPointEvaluator(const std::string& name)
+      : dir(name), d(parse(kFourPoints)), store(dir / "runs.sqlite"), ev(d, store, two_workers()) {}
+  static EvaluatorOptions two_workers() {
+    EvaluatorOptions eo;
+    eo.workers = 2;
+    return eo;
+  }
+  TempDir dir;
+  const DataFile d;
+  Store store;
+  Evaluator ev;
+};
+
 TEST(EvaluatorObservables, PointsOnTheSameRunsCostNoExtraRuns) {
-  TempDir dir("gapflow_observables");
-  const DataFile d = parse(kFourPoints);
-  Store store(dir / "runs.sqlite");
-  EvaluatorOptions eo;
-  eo.workers = 2;
-  Evaluator ev(d, store, eo);
+  FourPointEvaluator f("gapflow_observables");
+  Evaluator& ev = f.ev;
   const std::vector<Prediction> p = ev.evaluate({ParameterSet{}});
   EXPECT_EQ(ev.runs_simulated(), 4);  // 2 design points x 2 replicates, not 4 points x 2
   ASSERT_EQ(p.front().valid.size(), 4u);
@@ -150,20 +162,16 @@ TEST(EvaluatorObservables, PointsOnTheSameRunsCostNoExtraRuns) {
 
 // The keep test simulates only the held-out points: a points mask runs nothing for the others.
 TEST(EvaluatorObservables, APointsMaskRunsOnlyThosePoints) {
-  TempDir dir("gapflow_observables_mask");
-  const DataFile d = parse(kFourPoints);
-  Store store(dir / "runs.sqlite");
-  EvaluatorOptions eo;
-  eo.workers = 2;
-  Evaluator ev(d, store, eo);
-  const std::vector<Prediction> p = ev.evaluate({ParameterSet{}}, d.seed, 3, {false, false, false, true});
+  FourPointEvaluator f("gapflow_observables_mask");
+  Evaluator& ev = f.ev;
+  const std::vector<Prediction> p = ev.evaluate({ParameterSet{}}, f.d.seed, 3, {false, false, false, true});
   EXPECT_EQ(ev.runs_simulated(), 3);  // the W = 5 d point only, 3 replicates
   ASSERT_EQ(p.front().valid.size(), 4u);
   EXPECT_FALSE(p.front().valid[0]);
   EXPECT_FALSE(p.front().valid[2]);
   EXPECT_TRUE(p.front().valid[3]);
   EXPECT_TRUE(std::isnan(p.front().fit[0]));
-  EXPECT_THROW(ev.evaluate({ParameterSet{}}, d.seed, 3, {true}), std::invalid_argument);
+  EXPECT_THROW(ev.evaluate({ParameterSet{}}, f.d.seed, 3, {true}), std::invalid_argument);
 }
 
 // A slimmed store (scripts/slim_store.py) keeps the runs without their crossings: observables made
