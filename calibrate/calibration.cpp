@@ -1,6 +1,8 @@
 #include "calibrate/calibration.hpp"
 
+#include "calibrate/decisions.hpp"
 #include "calibrate/effect_catalogue.hpp"
+#include "calibrate/effect_responses.hpp"
 #include "calibrate/fit.hpp"
 #include "common/statistics.hpp"
 #include "common/toml_strict.hpp"
@@ -74,37 +76,6 @@ HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Eva
   return c;
 }
 
-// Paired replicate differences (moved - base) at point i over the baseline's
-// nodes, divided by `per`: moved[first + n] is node n moved.
-std::vector<double> paired_differences(const std::vector<Prediction>& moved, std::size_t first, const BaselineFit& base,
-                                       std::size_t i, double per) {
-  std::vector<double> d;
-  for (std::size_t n = 0; n < base.nodes.size(); ++n) {
-    const Prediction& m = moved[first + n];
-    const Prediction& b = base.node_predictions[n];
-    for (std::size_t r = 0; r < b.replicate_fit[i].size(); ++r) {
-      const double x = m.replicate_fit[i][r], y = b.replicate_fit[i][r];
-      if (x == x && y == y) d.push_back((x - y) / per);
-    }
-  }
-  return d;
-}
-
-// The sizes (offsets from neutral) at which an added effect is measured beyond
-// its step: half the step; the range's end on the step's side when it lies
-// beyond 1.25 steps (and halfway there when beyond 2.5); one step, or what
-// there is of it, on the other side of neutral when the range goes there.
-std::vector<double> refinement_offsets(const Candidate& c, const EffectDef& e) {
-  const double step = c.step, sign = step > 0 ? 1.0 : -1.0;
-  std::vector<double> out{step / 2};
-  const double end = (step > 0 ? e.hi : e.lo) - c.neutral;
-  if (std::abs(end) > 2.5 * std::abs(step)) out.push_back((step + end) / 2);
-  if (std::abs(end) > 1.25 * std::abs(step)) out.push_back(end);
-  const double other = (step > 0 ? e.lo : e.hi) - c.neutral;
-  if (std::abs(other) > 0.25 * std::abs(step)) out.push_back(-sign * std::min(std::abs(other), std::abs(step)));
-  return out;
-}
-
 constexpr double kInvalidResidual = 10.0;  // a point the model cannot produce counts as 10 sigma
 
 // Data minus model over the total standard error, on the fit scale (every point).
@@ -164,12 +135,6 @@ Eigen::VectorXd fitted_whitened(const DataFile& data, const Prediction& at, cons
   return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
 }
 
-// A step that stays inside [lo, hi] from `at` (reversed if needed).
-double step_inside(double at, double step, double lo, double hi) {
-  if (at + step <= hi + 1e-12 && at + step >= lo - 1e-12) return step;
-  return -step;
-}
-
 }  // namespace
 
 namespace {
@@ -177,176 +142,12 @@ namespace {
 class Loop {
  public:
   Loop(const DataFile& data, const CalibrationDef& def, Evaluator& ev, CalibrationResult& out)
-      : data_(data), def_(def), ev_(ev), out_(out) {}
+      : data_(data), def_(def), ev_(ev), out_(out), responses_(data, def, ev, [this](const std::string& s) { say(s); }),
+        n_free_(static_cast<int>(data.free.size())) {}
 
   void say(const std::string& line) {
     out_.log.push_back(line);
     std::cerr << "calibrate: " << line << "\n";
-  }
-
-  // The slope of every applicable effect at the nodes next to the fit: each moved
-  // by its physical step under common random numbers, all in one batch of runs.
-  std::vector<Candidate> signatures(const BaselineFit& base, std::vector<EffectTerm>& terms) {
-    std::vector<Candidate> cands;
-    for (const EffectDef& e : effect_catalogue()) {
-      if (!effect_applies(e, def_.model, data_)) continue;
-      Candidate c;
-      c.effect = e.name;
-      c.key = e.key;
-      c.neutral = neutral_value(e, data_);
-      c.step = step_inside(c.neutral, e.step, e.lo, e.hi);
-      cands.push_back(c);
-    }
-    std::vector<std::size_t> all(cands.size());
-    for (std::size_t c = 0; c < cands.size(); ++c) all[c] = c;
-    terms.assign(cands.size(), EffectTerm{});
-    measure_signatures(cands, all, base, terms, "moved by their physical steps");
-    // A signature lost in the noise points the score test nowhere (the data's residual is
-    // projected on a direction that is mostly noise): measure it again at its range's end and
-    // keep the step that moved the model more clearly (responses are not monotonic: a step
-    // twice as large can move it less), with both sizes in the effect's term.
-    std::vector<std::size_t> weak;
-    std::vector<Candidate> first;
-    std::vector<EffectTerm> first_terms;
-    for (std::size_t c = 0; c < cands.size(); ++c) {
-      const double far = valid_far_step(cands[c]);
-      if (cands[c].signature_chi2 < def_.weak_signature_chi2_per_point * cands[c].signature_dof && far != 0) {
-        weak.push_back(c);
-        first.push_back(cands[c]);
-        first_terms.push_back(terms[c]);
-        cands[c].step = far;
-      }
-    }
-    if (weak.empty()) return cands;
-    measure_signatures(cands, weak, base, terms, "weak at their steps, measured at their ranges' ends");
-    for (std::size_t k = 0; k < weak.size(); ++k) {
-      Candidate& at_far = cands[weak[k]];
-      EffectTerm& far_term = terms[weak[k]];
-      // Clearer: the smaller visibility p (the two may count different points where one step
-      // leaves some undefined); where both underflow, the larger chi^2 per point.
-      const bool far_clearer =
-          at_far.visibility_p < first[k].visibility_p ||
-          (at_far.visibility_p == first[k].visibility_p &&
-           at_far.signature_chi2 / std::max(1, at_far.signature_dof) > first[k].signature_chi2 / std::max(1, first[k].signature_dof));
-      Candidate kept = far_clearer ? at_far : first[k];
-      const Candidate& other = far_clearer ? first[k] : at_far;
-      EffectTerm term = far_clearer ? far_term : first_terms[k];
-      add_measured_size(term, far_clearer ? first_terms[k] : far_term, other.step);
-      kept.other_step = other.step;
-      kept.other_visibility_p = other.visibility_p;
-      kept.other_signature_chi2 = other.signature_chi2;
-      // The better of two looks: visible only at half the level (Bonferroni over the two), so
-      // that a weak effect's chance of passing for visible stays at visible_p.
-      kept.visible = kept.visibility_p < def_.visible_p / 2;
-      at_far = std::move(kept);
-      far_term = std::move(term);
-    }
-    return cands;
-  }
-
-  // The range's end on the step's side, moved toward neutral until every point still makes
-  // a scenario there (a corner radius cannot exceed an obstruction's inradius); 0 when that
-  // leaves less than 1.5 steps: there is no larger step to take.
-  double valid_far_step(const Candidate& c) const {
-    const EffectDef& e = *find_effect(c.effect);
-    const std::optional<double> far = valid_offset(c.key, c.neutral, (c.step > 0 ? e.hi : e.lo) - c.neutral);
-    return far && std::abs(*far) >= 1.5 * std::abs(c.step) ? *far : 0.0;
-  }
-
-  // `offset` from `neutral`, shrunk toward it (x 0.8 a try, at most 20) until every point
-  // makes a scenario with key = neutral + offset; none if it never does.
-  std::optional<double> valid_offset(const std::string& key, double neutral, double offset) const {
-    for (int k = 0; k <= 20; ++k, offset *= 0.8)
-      if (valid_everywhere(key, neutral + offset)) return offset;
-    return std::nullopt;
-  }
-
-  // Move the candidates `which` by their steps at every baseline node (same seeds) and
-  // set their signatures, visibility and terms from the paired differences.
-  void measure_signatures(std::vector<Candidate>& cands, const std::vector<std::size_t>& which, const BaselineFit& base,
-                          std::vector<EffectTerm>& terms, const std::string& why) {
-    std::vector<ParameterSet> sets;
-    for (std::size_t c : which)
-      for (const ParameterSet& n : base.nodes) sets.push_back(n.with(cands[c].key, cands[c].neutral + cands[c].step));
-    say(fmt::format("signatures: {} effect(s) {} at {} node(s) ({} runs)", which.size(), why, base.nodes.size(),
-                    sets.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
-    const std::vector<Prediction> moved = ev_.evaluate(sets);
-    for (std::size_t k = 0; k < which.size(); ++k) {
-      Candidate& cand = cands[which[k]];
-      const EffectDef& e = *find_effect(cand.effect);
-      std::vector<double> slope, slope_se;
-      std::vector<std::vector<double>> diffs;
-      for (std::size_t i = 0; i < data_.points.size(); ++i) {
-        diffs.push_back(paired_differences(moved, k * base.nodes.size(), base, i, cand.step));
-        const Summary s = summarize(diffs.back());
-        slope.push_back(diffs.back().size() >= 2 ? s.mean : 0.0);
-        slope_se.push_back(diffs.back().size() >= 2 ? s.se() : 0.0);
-      }
-      // Pass 5 of the blind study lost both corner-rounding twins here: the 28 fitted points
-      // without an obstruction (identical runs) counted as degrees of freedom beside the 4 with it.
-      const Visibility v = step_visibility(diffs, data_.held_out_flags());
-      EffectTerm t = EffectTerm::single_step(e.name, e.key, cand.neutral, e.lo, e.hi, cand.step, slope, slope_se);
-      cand.signature = t.slope;
-      cand.signature_chi2 = v.chi2;
-      cand.signature_dof = v.dof;
-      cand.visibility_p = v.p;
-      cand.visible = cand.visibility_p < def_.visible_p;
-      terms[which[k]] = std::move(t);
-    }
-  }
-
-  // A size measured for a signature that was not kept stays in the effect's term: those are
-  // runs already made, and the size fit uses every measured size.
-  static void add_measured_size(EffectTerm& term, const EffectTerm& other, double other_step) {
-    std::vector<double> shift, se;
-    for (std::size_t i = 0; i < other.slope.size(); ++i) {
-      shift.push_back(other.slope[i] * other_step);
-      se.push_back(other.slope_se[i] * std::abs(other_step));
-    }
-    term.add_size(other_step, shift, se);
-  }
-
-  // Measure an effect the loop is about to add at more sizes across its range
-  // (half its step, the range's end and the middle between, the other side of
-  // neutral), so that its size is fitted on its measured response, not on a line
-  // through one step.
-  void refine(EffectTerm& term, const Candidate& c, const BaselineFit& base) {
-    std::vector<double> offsets;
-    for (double da : refinement_offsets(c, *find_effect(c.effect)))
-      if (valid_everywhere(c.key, c.neutral + da)) offsets.push_back(da);
-    // The fit may move the size only where every point still makes a scenario (a gap offset
-    // below -W closes the gap): the range shrinks toward neutral until it does.
-    for (double* bound : {&term.lo, &term.hi}) *bound = c.neutral + valid_offset(c.key, c.neutral, *bound - c.neutral).value_or(0.0);
-    std::vector<ParameterSet> sets;
-    for (double da : offsets)
-      for (const ParameterSet& n : base.nodes) sets.push_back(n.with(c.key, c.neutral + da));
-    say(fmt::format("{}: response measured at {} more size(s) ({}) at {} node(s)", c.effect, offsets.size(),
-                    fmt::join(offsets, ", "), base.nodes.size()));
-    const std::vector<Prediction> moved = ev_.evaluate(sets);
-    for (std::size_t k = 0; k < offsets.size(); ++k) {
-      std::vector<double> shift, se;
-      for (std::size_t i = 0; i < data_.points.size(); ++i) {
-        const Summary s = summarize(paired_differences(moved, k * base.nodes.size(), base, i, 1.0));
-        shift.push_back(s.n >= 2 ? s.mean : 0.0);
-        se.push_back(s.n >= 2 ? s.se() : 0.0);
-      }
-      term.add_size(offsets[k], shift, se);
-    }
-  }
-
-  // Whether every point makes a valid scenario with `key` = value (where the key applies).
-  bool valid_everywhere(const std::string& key, double value) const {
-    for (std::size_t i = 0; i < data_.points.size(); ++i) {
-      if (!key_applies_to(key, data_.point_scenario(i).def)) continue;
-      try {
-        (void)compile_scenario(data_.point_scenario(i, {key + "=" + number_text(value)}).def);
-      } catch (const ScenarioError&) {
-        return false;
-      } catch (const ScenarioInvalid&) {
-        return false;
-      }
-    }
-    return true;
   }
 
   // Score the candidates against the state's residual; X = free parameters + added effects.
@@ -414,11 +215,195 @@ class Loop {
     return out;
   }
 
+  // Rounds of attribution (steps 2-4 of calibration.hpp), from the baseline's state.
+  void attribute(const BaselineFit& base, Surface& surface, ModelState& state) {
+    std::vector<EffectTerm> terms;
+    const Reference baseline = EffectResponses::baseline_reference(base);
+    std::vector<Candidate> cands = responses_.signatures(baseline, terms);
+    std::optional<Reference> reference = baseline;  // where the next effect's response is measured
+    for (int round_no = 0; round_no < def_.max_effects; ++round_no) {
+      Round round = score_round(cands, state, surface);
+      const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
+      if (!worth_trying(round, state, best)) break;
+      if (!reference) reference = responses_.reference_with(base, state.params, effect_keys(surface));
+      const Candidate chosen = *best;
+      const Trial trial = try_effect(chosen, terms, *reference, surface, state, state);
+      if (trial.verdict == Keep::keep) {
+        round.decision = added_text(chosen, round, trial, state.bic);
+        say(round.decision);
+        out_.rounds.push_back(std::move(round));
+        accept(chosen, trial, cands);
+        surface = trial.surface, state = trial.after, reference.reset();
+        continue;
+      }
+      round.decision = rejected_text(chosen, trial);
+      say(round.decision);
+      out_.rounds.push_back(std::move(round));
+      // Forward selection adds one effect at a time and fails where the first of two effects,
+      // alone, makes the points the second one explains worse (blind pass 6, two-drag-gap: a
+      // gap offset cut BIC from 1545 to 254 and raised the held-out chi^2 from 945 to 1226).
+      // With decisive evidence for the first, the pair is fitted and tested as one step.
+      const bool pair_possible = round_no + 1 < def_.max_effects && trial.verdict == Keep::held_out_worse &&
+                                 decisive(trial.evidence, def_.decisive_bic);
+      if (!pair_possible || !try_pair(base, chosen, trial, cands, terms, surface, state)) break;
+      ++round_no;
+      reference.reset();
+    }
+    refresh_added_sizes(surface, state);
+  }
+
  private:
+  struct Trial {
+    Surface surface;        // with the effect's term
+    EffectFit fit;          // its size, with everything else, on that surface
+    ModelState after;
+    KeepEvidence evidence;  // against the state it must beat
+    Keep verdict = Keep::bic_not_better;
+  };
+
+  static std::vector<std::string> effect_keys(const Surface& s) {
+    std::vector<std::string> keys;
+    for (const EffectTerm& t : s.effects) keys.push_back(t.key);
+    return keys;
+  }
+
+  // Whether the round looks for an effect (decisions.hpp); if not, its decision is recorded.
+  bool worth_trying(Round& round, const ModelState& state, const Candidate* best) {
+    const double p = state.fitted.chi.p;
+    switch (should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha)) {
+      case Attribute::yes: return true;
+      case Attribute::consistent_with_noise:
+        round.decision = best ? fmt::format("the residual is consistent with the noise (chi2 p = {:.3g}): nothing to "
+                                            "explain (best candidate {}: adjusted p = {:.3g})", p, best->effect, best->p_adjusted)
+                              : fmt::format("the residual is consistent with the noise (chi2 p = {:.3g})", p);
+        break;
+      case Attribute::nothing_visible: round.decision = "no catalogue effect is visible in this design"; break;
+      case Attribute::nothing_significant:
+        round.decision = fmt::format("no effect's score is significant (best {}: adjusted p = {:.3g}) although the "
+                                     "residual is not consistent with the noise (chi2 p = {:.3g})",
+                                     best->effect, best->p_adjusted, p);
+        break;
+    }
+    say(round.decision);
+    out_.rounds.push_back(std::move(round));
+    return false;
+  }
+
+  // The candidate's response measured at the reference (at the baseline: its signature's term,
+  // measured there, with the refinement sizes; with effects added: every size measured anew with
+  // them), fitted jointly with everything in `surface` from `from`, tested against `against`.
+  Trial try_effect(const Candidate& c, const std::vector<EffectTerm>& signature_terms, const Reference& ref,
+                   const Surface& surface, const ModelState& from, const ModelState& against) {
+    Trial t;
+    t.surface = surface;
+    if (surface.effects.empty()) {
+      EffectTerm term = *std::find_if(signature_terms.begin(), signature_terms.end(),
+                                      [&](const EffectTerm& x) { return x.effect == c.effect; });
+      responses_.refine(term, c, ref);
+      t.surface.effects.push_back(std::move(term));
+    } else {
+      t.surface.effects.push_back(responses_.measure_term(c, ref));
+    }
+    const EffectDef& e = *find_effect(c.effect);
+    const ParameterSet start = from.params.with(e.key, std::clamp(c.neutral + c.score.estimate, e.lo, e.hi));
+    const int k = n_free_ + static_cast<int>(t.surface.effects.size());
+    t.fit = fit_effect(data_, t.surface, start, t.surface.effects.size() - 1, k);
+    if (t.fit.restarted)
+      say(fmt::format("{}: the first fit stopped at a local minimum; restarted from the profile scan's best value", e.name));
+    t.after = make_state(data_, t.fit.params, t.surface.predict(t.fit.params, data_), k);
+    // The held-out test by direct simulation, not on the surface: both parameter sets run
+    // on seeds of their own (common to both, so that their difference is not the packing;
+    // not the final re-score's, which must not have decided anything).
+    // On the surface a held-out point's prediction carries the finite-difference noise of
+    // the effect's measured response there, which can outweigh its data's error.
+    const HeldOutCheck held = held_out_check(data_, def_, ev_, against.params, t.fit.params);
+    t.evidence = {against.bic, t.after.bic, held.n, held.before, held.after};
+    t.verdict = keep_verdict(t.evidence, def_.decisive_bic);
+    return t;
+  }
+
+  // After `first` was vetoed by the held-out test on decisive BIC evidence: the best candidate
+  // against the residual `first` leaves, measured with `first` in place, fitted with it, and
+  // the pair tested against the state before either. True when the pair was added.
+  bool try_pair(const BaselineFit& base, const Candidate& first, const Trial& one, std::vector<Candidate>& cands,
+                const std::vector<EffectTerm>& terms, Surface& surface, ModelState& state) {
+    std::vector<Candidate> rest;
+    for (const Candidate& c : cands)
+      if (c.effect != first.effect) rest.push_back(c);
+    Round round = score_round(rest, one.after, one.surface);
+    const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
+    say(fmt::format("a pair with {}: the next candidate scored on the residual {} leaves", first.effect, first.effect));
+    if (!worth_trying(round, one.after, best)) return false;
+    const Candidate second = *best;
+    const Reference ref = responses_.reference_with(base, one.fit.params, effect_keys(one.surface));
+    const Trial two = try_effect(second, terms, ref, one.surface, one.after, state);
+    if (two.verdict != Keep::keep) {
+      round.decision = rejected_text(second, two) + fmt::format(" (as a pair with {})", first.effect);
+      say(round.decision);
+      out_.rounds.push_back(std::move(round));
+      return false;
+    }
+    round.decision = added_text(second, round, two, state.bic) + fmt::format(" (as a pair with {}, fitted jointly; "
+                                                                             "BIC and held-out chi2 against the state "
+                                                                             "before either)", first.effect);
+    say(round.decision);
+    out_.rounds.push_back(std::move(round));
+    Round& first_round = out_.rounds[out_.rounds.size() - 2];
+    first_round.decision += fmt::format("; kept as a pair with {} (next round)", second.effect);
+    accept_as(first, group_of(first_round, first), two.fit.params, one.fit.interval, cands);
+    accept(second, two, cands);
+    surface = two.surface, state = two.after;
+    return true;
+  }
+
+  void accept(const Candidate& c, const Trial& t, std::vector<Candidate>& cands) {
+    accept_as(c, group_of(out_.rounds.back(), c), t.fit.params, t.fit.interval, cands);
+  }
+
+  void accept_as(const Candidate& c, std::vector<std::string> group, const ParameterSet& fitted,
+                 const ProfileInterval& interval, std::vector<Candidate>& cands) {
+    out_.effects.push_back({c.effect, c.key, std::move(group), c.neutral, fitted.get(c.key, c.neutral), interval.lo,
+                            interval.hi, interval.bounded_lo && interval.bounded_hi});
+    cands.erase(std::remove_if(cands.begin(), cands.end(), [&](const Candidate& x) { return x.effect == c.effect; }),
+                cands.end());
+  }
+
+  // An effect added in an earlier round moves when a later one is fitted with it: every added
+  // effect's size and profile interval are taken again on the final surface.
+  void refresh_added_sizes(const Surface& surface, const ModelState& state) {
+    if (out_.effects.size() < 2) return;
+    const int k = n_free_ + static_cast<int>(surface.effects.size());
+    for (std::size_t j = 0; j < out_.effects.size(); ++j) {
+      AddedEffect& a = out_.effects[j];
+      const ProfileInterval in = fit_effect(data_, surface, state.params, j, k).interval;
+      a.value = state.params.get(a.key, a.neutral);
+      a.lo95 = in.lo, a.hi95 = in.hi, a.interval_bounded = in.bounded_lo && in.bounded_hi;
+    }
+  }
+
+  std::string added_text(const Candidate& c, const Round& round, const Trial& t, double bic_before) const {
+    const std::vector<std::string> group = group_of(round, c);
+    const EffectDef& e = *find_effect(c.effect);
+    return fmt::format("added {}{} = {:.4g} {} [{:.4g}, {:.4g}] (adjusted p = {:.3g}); BIC {:.1f} -> {:.1f}; "
+                       "held-out chi2 (keep-test seeds) {:.1f} -> {:.1f}",
+                       c.effect, group.size() > 1 ? fmt::format(" (for the group {})", fmt::join(group, ", ")) : "",
+                       t.fit.params.get(c.key, c.neutral), e.unit, t.fit.interval.lo, t.fit.interval.hi, c.p_adjusted,
+                       bic_before, t.after.bic, t.evidence.held_before, t.evidence.held_after);
+  }
+
+  static std::string rejected_text(const Candidate& c, const Trial& t) {
+    return fmt::format("best candidate {} (adjusted p = {:.3g}) rejected: BIC {:.1f} -> {:.1f}, held-out chi2 "
+                       "(keep-test seeds) {:.1f} -> {:.1f}",
+                       c.effect, c.p_adjusted, t.evidence.bic_before, t.evidence.bic_after, t.evidence.held_before,
+                       t.evidence.held_after);
+  }
+
   const DataFile& data_;
   const CalibrationDef& def_;
   Evaluator& ev_;
   CalibrationResult& out_;
+  EffectResponses responses_;
+  int n_free_;
 };
 
 }  // namespace
@@ -444,76 +429,9 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
     loop.say(fmt::format("observables on the same runs, correlation of their replicate values (chi^2 treats them as "
                          "independent): {}", fmt::join(correlations, "; ")));
 
-  // 2.-4. Rounds of attribution.
-  std::vector<EffectTerm> terms;
-  // --max-effects 0 is a fit and its errors only: no candidate is measured.
-  std::vector<Candidate> cands = def.max_effects > 0 ? loop.signatures(base, terms) : std::vector<Candidate>{};
+  // 2.-4. Rounds of attribution (--max-effects 0 is a fit and its errors only: nothing is measured).
   ModelState state = out.before;
-  for (int round_no = 0; round_no < def.max_effects; ++round_no) {
-    Round round = loop.score_round(cands, state, surface);
-    const Candidate* best = round.best.empty() ? nullptr : loop.find(round, round.best);
-    const bool residual_ok = state.fitted.chi.p >= def.alpha;
-    if (!best || best->p_adjusted >= def.alpha) {
-      round.decision = residual_ok ? "the residual is consistent with the noise and no effect's score is significant"
-                                   : (best ? fmt::format("no effect's score is significant (best {}: adjusted p = {:.3g}) "
-                                                         "although the residual is not consistent with the noise",
-                                                         best->effect, best->p_adjusted)
-                                           : "no catalogue effect is visible in this design");
-      loop.say(round.decision);
-      out.rounds.push_back(std::move(round));
-      break;
-    }
-    const std::vector<std::string> group = loop.group_of(round, *best);
-    const EffectDef& e = *find_effect(best->effect);
-    Surface trial = surface;
-    for (const EffectTerm& t : terms)
-      if (t.effect == e.name) trial.effects.push_back(t);
-    loop.refine(trial.effects.back(), *best, base);
-    const ParameterSet start_at = state.params.with(e.key, std::clamp(best->neutral + best->score.estimate, e.lo, e.hi));
-    const int k_after = n_free + static_cast<int>(trial.effects.size());
-    const EffectFit effect_fit = fit_effect(data, trial, start_at, trial.effects.size() - 1, k_after);
-    const ParameterSet& fitted = effect_fit.params;
-    const ProfileInterval& interval = effect_fit.interval;
-    if (effect_fit.restarted)
-      loop.say(fmt::format("{}: the first fit stopped at a local minimum; restarted from the profile scan's best value",
-                           e.name));
-    ModelState after = make_state(data, fitted, trial.predict(fitted, data), k_after);
-    const bool bic_better = after.bic < state.bic;
-    // The held-out test by direct simulation, not on the surface: both parameter sets run
-    // on seeds of their own (common to both, so that their difference is not the packing;
-    // not the final re-score's, which must not have decided anything).
-    // On the surface a held-out point's prediction carries the finite-difference noise of
-    // the effect's measured response there, which can outweigh its data's error.
-    const HeldOutCheck held = held_out_check(data, def, ev, state.params, fitted);
-    // "Improves" must be a test, not a coin flip: where the held-out points barely feel the
-    // effect, their chi^2 moves by noise either way (a planted spinning friction with adjusted
-    // p 1e-14 and BIC 84.8 -> 17.7 was rejected for 11.0 -> 11.3). With decisive evidence, a
-    // rise within one standard deviation of a chi^2 with n_held_out degrees of freedom passes.
-    const bool decisive = state.bic - after.bic >= def.decisive_bic;
-    const bool held_better = held.n == 0 || held.after < held.before ||
-                             (decisive && held.after - held.before <= std::sqrt(2.0 * held.n));
-    if (!bic_better || !held_better) {
-      round.decision = fmt::format("best candidate {} (adjusted p = {:.3g}) rejected: BIC {:.1f} -> {:.1f}, held-out "
-                                   "chi2 (keep-test seeds) {:.1f} -> {:.1f}",
-                                   best->effect, best->p_adjusted, state.bic, after.bic, held.before, held.after);
-      loop.say(round.decision);
-      out.rounds.push_back(std::move(round));
-      break;
-    }
-    AddedEffect added{e.name, e.key, group, best->neutral, fitted.get(e.key, best->neutral),
-                      interval.lo, interval.hi, interval.bounded_lo && interval.bounded_hi};
-    round.decision = fmt::format("added {}{} = {:.4g} {} [{:.4g}, {:.4g}] (adjusted p = {:.3g}); BIC {:.1f} -> {:.1f}; "
-                                 "held-out chi2 (keep-test seeds) {:.1f} -> {:.1f}",
-                                 e.name, group.size() > 1 ? fmt::format(" (for the group {})", fmt::join(group, ", ")) : "",
-                                 added.value, e.unit, added.lo95, added.hi95, best->p_adjusted, state.bic, after.bic, held.before, held.after);
-    loop.say(round.decision);
-    out.rounds.push_back(std::move(round));
-    out.effects.push_back(added);
-    cands.erase(std::remove_if(cands.begin(), cands.end(), [&](const Candidate& c) { return c.effect == e.name; }),
-                cands.end());
-    surface = trial;
-    state = after;
-  }
+  if (def.max_effects > 0) loop.attribute(base, surface, state);
   out.after = state;
 
   // Fresh seeds: the fitted parameters before and after, simulated directly on other runs.

@@ -15,9 +15,14 @@
 //      and so do the rivals: candidates whose score is within chi2_1(1 - alpha) = 3.84
 //      of the best one's (the score is the chi^2 a one-effect fit removes, so these
 //      are the effects the data cannot rank below the best at that level);
-//   4. the best candidate (if significant) is fitted jointly with the free
-//      parameters (BOBYQA), its size given with a profile interval, and kept only
-//      if BIC and the held-out chi^2 both improve; a second round may add one more;
+//   4. only when the fitted residual is beyond the noise (chi^2 p < alpha) and the
+//      best candidate is significant (calibrate/decisions.hpp): that candidate is
+//      fitted jointly with the free parameters (BOBYQA), its size given with a
+//      profile interval, and kept only if BIC and the held-out chi^2 both improve; a
+//      second round may add one more, its response measured anew with the first
+//      effect in place (calibrate/effect_responses.hpp: effects do not add up). A
+//      first effect with decisive BIC evidence that the held-out points veto is tried
+//      as a pair with the next candidate, fitted jointly and tested as one step;
 //   5. stop when the residual is consistent with the noise, or say "unexplained
 //      residual" when it is not and no candidate helps.
 #pragma once

@@ -1,0 +1,66 @@
+// The calibration loop's decisions on numbers (calibrate/decisions.hpp), several of them the
+// blind study's own cases, and where a later round measures an effect's response.
+#include "calibrate/decisions.hpp"
+#include "calibrate/effect_responses.hpp"
+
+#include <gtest/gtest.h>
+
+namespace gapflow {
+namespace {
+
+TEST(AttributeDecision, AResidualWithinTheNoiseIsNotAttributedEvenToASignificantScore) {
+  // Blind pass 6, null-3: chi^2 p 0.128 on the fitted points, corner rounding at adjusted p 0.038.
+  EXPECT_EQ(should_attribute(0.128, true, 0.038, 0.05), Attribute::consistent_with_noise);
+  // The same score where the residual is beyond the noise (wall friction low: chi2/nu 1.66 on 31, p ~ 0.011).
+  EXPECT_EQ(should_attribute(0.011, true, 0.038, 0.05), Attribute::yes);
+  EXPECT_EQ(should_attribute(0.011, true, 0.2, 0.05), Attribute::nothing_significant);
+  EXPECT_EQ(should_attribute(0.011, false, 0.0, 0.05), Attribute::nothing_visible);
+  // The boundary belongs to "consistent": p = alpha is not a rejection at level alpha.
+  EXPECT_EQ(should_attribute(0.05, true, 1e-9, 0.05), Attribute::consistent_with_noise);
+}
+
+TEST(KeepDecision, BicMustFall) {
+  EXPECT_EQ(keep_verdict({.bic_before = -184.5, .bic_after = -184.5, .held_out_n = 12, .held_before = 14, .held_after = 10},
+                         10),
+            Keep::bic_not_better);
+  EXPECT_EQ(keep_verdict({.bic_before = 10, .bic_after = 12, .held_out_n = 0}, 10), Keep::bic_not_better);
+}
+
+TEST(KeepDecision, DecisiveEvidenceToleratesAHeldOutRiseWithinItsNoise) {
+  // Pass 3's spinning friction: BIC 84.8 -> 17.7, held-out chi^2 11.0 -> 11.3 on 12 points (sd sqrt(24) = 4.9).
+  const KeepEvidence spinning{.bic_before = 84.8, .bic_after = 17.7, .held_out_n = 12, .held_before = 11.0, .held_after = 11.3};
+  EXPECT_TRUE(decisive(spinning, 10));
+  EXPECT_EQ(keep_verdict(spinning, 10), Keep::keep);
+  // The same rise with a BIC drop below decisive must fall instead.
+  const KeepEvidence weak{.bic_before = 20, .bic_after = 15, .held_out_n = 12, .held_before = 11.0, .held_after = 11.3};
+  EXPECT_FALSE(decisive(weak, 10));
+  EXPECT_EQ(keep_verdict(weak, 10), Keep::held_out_worse);
+  // A rise beyond one sd is a veto even with decisive evidence: pass 6's two-drag-gap, whose
+  // gap offset alone cut BIC by 1291 and raised the held-out chi^2 from 945 to 1226. The loop
+  // then tries the pair (decisive and vetoed by the held-out points: both must hold).
+  const KeepEvidence gap{.bic_before = 1545.3, .bic_after = 254.0, .held_out_n = 12, .held_before = 944.8, .held_after = 1226.1};
+  EXPECT_EQ(keep_verdict(gap, 10), Keep::held_out_worse);
+  EXPECT_TRUE(decisive(gap, 10));
+  // Held-out points that fall always pass once BIC fell.
+  EXPECT_EQ(keep_verdict({.bic_before = 2, .bic_after = 1, .held_out_n = 12, .held_before = 30, .held_after = 29}, 10),
+            Keep::keep);
+}
+
+TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFittedValues) {
+  const std::vector<ParameterSet> nodes{ParameterSet{}.with("particles.friction_particle", 0.3),
+                                        ParameterSet{}.with("particles.friction_particle", 0.35)};
+  // The fitted state: another friction (the fit's, not a node's) and a tilt of 5.4 deg.
+  const ParameterSet fitted =
+      ParameterSet{}.with("particles.friction_particle", 0.33).with("plane.lateral_tilt_deg", 5.4);
+  const std::vector<ParameterSet> at = nodes_with_effects(nodes, fitted, {"plane.lateral_tilt_deg"});
+  ASSERT_EQ(at.size(), 2u);
+  for (std::size_t n = 0; n < 2; ++n) {
+    EXPECT_DOUBLE_EQ(at[n].get("plane.lateral_tilt_deg", 0), 5.4);
+    // Each node keeps its own free parameters: the finite differences pair runs at the nodes.
+    EXPECT_DOUBLE_EQ(at[n].get("particles.friction_particle", 0), nodes[n].get("particles.friction_particle", 0));
+  }
+  EXPECT_EQ(nodes_with_effects(nodes, fitted, {})[1].label(), nodes[1].label());
+}
+
+}  // namespace
+}  // namespace gapflow
