@@ -144,6 +144,8 @@ class Loop {
   Loop(const DataFile& data, const CalibrationDef& def, Evaluator& ev, CalibrationResult& out)
       : data_(data), def_(def), ev_(ev), out_(out), responses_(data, def, ev, [this](const std::string& s) { say(s); }),
         n_free_(static_cast<int>(data.free.size())) {}
+  Loop(const Loop&) = delete;  // responses_ reports through a lambda holding `this`
+  Loop& operator=(const Loop&) = delete;
 
   void say(const std::string& line) {
     out_.log.push_back(line);
@@ -225,7 +227,7 @@ class Loop {
       Round round = score_round(cands, state, surface);
       const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
       if (!worth_trying(round, state, best)) break;
-      if (!reference) reference = responses_.reference_with(base, state.params, effect_keys(surface));
+      if (!reference) reference = responses_.reference_with(base, state.params, surface.effects);
       const Candidate chosen = *best;
       const Trial trial = try_effect(chosen, terms, *reference, surface, state, state);
       if (trial.verdict == Keep::keep) {
@@ -261,14 +263,9 @@ class Loop {
     Keep verdict = Keep::bic_not_better;
   };
 
-  static std::vector<std::string> effect_keys(const Surface& s) {
-    std::vector<std::string> keys;
-    for (const EffectTerm& t : s.effects) keys.push_back(t.key);
-    return keys;
-  }
-
-  // Whether the round looks for an effect (decisions.hpp); if not, its decision is recorded.
-  bool worth_trying(Round& round, const ModelState& state, const Candidate* best) {
+  // Whether the round looks for an effect (decisions.hpp); if not, its decision is recorded,
+  // prefixed by `context` (a pair's second round names the effect in place).
+  bool worth_trying(Round& round, const ModelState& state, const Candidate* best, const std::string& context = "") {
     const double p = state.fitted.chi.p;
     switch (should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha)) {
       case Attribute::yes: return true;
@@ -284,6 +281,7 @@ class Loop {
                                      best->effect, best->p_adjusted, p);
         break;
     }
+    round.decision = context + round.decision;
     say(round.decision);
     out_.rounds.push_back(std::move(round));
     return false;
@@ -332,20 +330,25 @@ class Loop {
       if (c.effect != first.effect) rest.push_back(c);
     Round round = score_round(rest, one.after, one.surface);
     const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
-    say(fmt::format("a pair with {}: the next candidate scored on the residual {} leaves", first.effect, first.effect));
-    if (!worth_trying(round, one.after, best)) return false;
+    const std::string context = fmt::format("with {} in place (a pair): ", first.effect);
+    if (!worth_trying(round, one.after, best, context)) return false;
     const Candidate second = *best;
-    const Reference ref = responses_.reference_with(base, one.fit.params, effect_keys(one.surface));
+    const Reference ref = responses_.reference_with(base, one.fit.params, one.surface.effects);
     const Trial two = try_effect(second, terms, ref, one.surface, one.after, state);
-    if (two.verdict != Keep::keep) {
-      round.decision = rejected_text(second, two) + fmt::format(" (as a pair with {})", first.effect);
+    // The pair is one step against the state before either, and the second effect must also
+    // earn its place beside the first: BIC lower than the first's alone.
+    const bool second_needed = two.after.bic < one.after.bic;
+    if (two.verdict != Keep::keep || !second_needed) {
+      round.decision = context + rejected_text(second, two) +
+                       (second_needed ? "" : fmt::format("; BIC with {} alone {:.1f}", first.effect, one.after.bic));
       say(round.decision);
       out_.rounds.push_back(std::move(round));
       return false;
     }
-    round.decision = added_text(second, round, two, state.bic) + fmt::format(" (as a pair with {}, fitted jointly; "
-                                                                             "BIC and held-out chi2 against the state "
-                                                                             "before either)", first.effect);
+    round.decision = context + added_text(second, round, two, state.bic) +
+                     fmt::format("; fitted jointly with {} = {:.4g} (BIC and held-out chi2 against the state before "
+                                 "either; BIC with {} alone {:.1f})",
+                                 first.effect, two.fit.params.get(first.key, first.neutral), first.effect, one.after.bic);
     say(round.decision);
     out_.rounds.push_back(std::move(round));
     Round& first_round = out_.rounds[out_.rounds.size() - 2];
@@ -368,17 +371,26 @@ class Loop {
                 cands.end());
   }
 
-  // An effect added in an earlier round moves when a later one is fitted with it: every added
-  // effect's size and profile interval are taken again on the final surface.
-  void refresh_added_sizes(const Surface& surface, const ModelState& state) {
+  // An effect added in an earlier round moves when a later one is fitted with it (and a pair's
+  // first effect has only its solo fit's interval): every added effect's size and profile
+  // interval are taken again on the final surface. `out_.effects[j]` is `surface.effects[j]`:
+  // both grow by one per effect kept, in the same order. Where the re-fit's profile scan finds a
+  // lower deviance than the state's, the state moves there (and the log says so), so that the
+  // reported value is the interval's own estimate.
+  void refresh_added_sizes(const Surface& surface, ModelState& state) {
     if (out_.effects.size() < 2) return;
     const int k = n_free_ + static_cast<int>(surface.effects.size());
     for (std::size_t j = 0; j < out_.effects.size(); ++j) {
       AddedEffect& a = out_.effects[j];
-      const ProfileInterval in = fit_effect(data_, surface, state.params, j, k).interval;
-      a.value = state.params.get(a.key, a.neutral);
-      a.lo95 = in.lo, a.hi95 = in.hi, a.interval_bounded = in.bounded_lo && in.bounded_hi;
+      const EffectFit f = fit_effect(data_, surface, state.params, j, k);
+      if (f.restarted) {
+        say(fmt::format("{}: the final re-fit found a lower deviance from the profile scan's best value", a.effect));
+        state = make_state(data_, f.params, surface.predict(f.params, data_), k);
+      }
+      a.value = f.params.get(a.key, a.neutral);
+      a.lo95 = f.interval.lo, a.hi95 = f.interval.hi, a.interval_bounded = f.interval.bounded_lo && f.interval.bounded_hi;
     }
+    say(fmt::format("the added effects re-taken on the final surface: {}", state.params.label()));
   }
 
   std::string added_text(const Candidate& c, const Round& round, const Trial& t, double bic_before) const {

@@ -133,10 +133,11 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
   o << fmt::format("**Verdict: {}.**", r.verdict);
   for (const AddedEffect& e : r.effects) {
     const EffectDef* d = find_effect(e.effect);
-    // An interval that is not bounded is still the profile's: it reached the effect's range end.
+    // An interval that is not bounded is still the profile's: it reached the end of the effect's
+    // range (its plausible range, shrunk to where every point still makes a scenario).
     o << fmt::format(" Added `{}` = {:.4g} {} (95 % profile interval [{:.4g}, {:.4g}]{}; without it {:.4g}){}.", e.key,
                      e.value, d ? d->unit : "", e.lo95, e.hi95,
-                     e.interval_bounded ? "" : ", cut at the end of the effect's plausible range", e.neutral,
+                     e.interval_bounded ? "" : ", cut at the end of the range the fit may move it in", e.neutral,
                      e.group.size() > 1 ? fmt::format(", standing for the group {{{}}} that this design cannot tell apart", fmt::join(e.group, ", ")) : "");
   }
   if (r.poor_fit)

@@ -50,10 +50,10 @@ void add_measured_size(EffectTerm& term, const EffectTerm& other, double other_s
 }  // namespace
 
 std::vector<ParameterSet> nodes_with_effects(const std::vector<ParameterSet>& nodes, const ParameterSet& effects_at,
-                                             const std::vector<std::string>& keys) {
+                                             const std::vector<EffectTerm>& effects) {
   std::vector<ParameterSet> out;
   for (ParameterSet n : nodes) {
-    for (const std::string& k : keys) n = n.with(k, effects_at.get(k, 0.0));
+    for (const EffectTerm& t : effects) n = n.with(t.key, effects_at.get(t.key, t.neutral));
     out.push_back(std::move(n));
   }
   return out;
@@ -71,11 +71,13 @@ std::vector<double> refinement_offsets(const Candidate& c, const EffectDef& e) {
 }
 
 Reference EffectResponses::reference_with(const BaselineFit& base, const ParameterSet& fitted,
-                                          const std::vector<std::string>& effect_keys) {
+                                          const std::vector<EffectTerm>& effects) {
   Reference r;
-  r.nodes = nodes_with_effects(base.nodes, fitted, effect_keys);
+  r.nodes = nodes_with_effects(base.nodes, fitted, effects);
+  std::vector<std::string> at;
+  for (const EffectTerm& t : effects) at.push_back(fmt::format("{} = {:.4g}", t.key, fitted.get(t.key, t.neutral)));
   say_(fmt::format("reference for the next effect: the {} baseline node(s) with {} ({} runs)", r.nodes.size(),
-                   fmt::join(effect_keys, ", "),
+                   fmt::join(at, ", "),
                    r.nodes.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
   r.predictions = ev_.evaluate(r.nodes);
   return r;
@@ -237,7 +239,8 @@ void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std:
   std::vector<ParameterSet> sets;
   for (double da : offsets)
     for (const ParameterSet& n : at.nodes) sets.push_back(n.with(c.key, c.neutral + da));
-  say_(fmt::format("{}: response measured at {} size(s) ({}) at {} node(s)", c.effect, offsets.size(),
+  say_(fmt::format("{}: response measured at {} {}size(s) ({}) at {} node(s)", c.effect, offsets.size(),
+                   term.offsets.size() > 1 ? "more " : "",
                    fmt::join(offsets, ", "), at.nodes.size()));
   const std::vector<Prediction> moved = ev_.evaluate(sets);
   for (std::size_t k = 0; k < offsets.size(); ++k) {

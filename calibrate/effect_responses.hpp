@@ -10,12 +10,17 @@
 //     range, so that its size is fitted on its measured response.
 //
 // The reference: the nodes, with the effects already added set to their fitted
-// values. Effects do not add up: a rolling resistance slows spheres on a board
-// tilted sideways by 5 deg differently from one that is not (blind study pass 6:
-// with a tilt added, a planted rolling resistance measured on the untilted nodes
-// cut BIC by 30 and raised the held-out chi^2 from 48 to 168). The first round's
-// reference is the baseline's own nodes (no runs); a later round's costs one more
-// batch of the nodes' runs.
+// values. Effects need not add up: a rolling resistance may slow spheres on a board
+// tilted sideways by 5 deg differently from one that is not. Our reading of blind
+// pass 6's two-tilt-rolling (not measured apart): with a tilt added, a planted
+// rolling resistance measured on the untilted nodes cut BIC by 30 and raised the
+// held-out chi^2 from 48 to 168. The first round's reference is the baseline's own
+// nodes (no runs); a later round's costs one more batch of the nodes' runs, and
+// only the candidate about to be added is measured there: which candidate that is
+// is still decided on the signatures measured at the baseline (re-measuring all ten
+// would cost a second signature batch, ~2000 runs).
+// A later round's term has the step and the refinement sizes, not the range's-end
+// look a weak signature got in the first round.
 #pragma once
 
 #include "calibrate/calibration.hpp"
@@ -35,10 +40,10 @@ struct Reference {
   std::vector<Prediction> predictions;  // one per node: the partners of the moved runs
 };
 
-// The baseline's nodes with `effects_at`'s effect keys set (every other key of it is
-// ignored: the nodes keep their own free parameters). `keys` names the effect keys.
+// The baseline's nodes with the effects' keys set to their values in `effects_at` (an effect
+// it lacks at its neutral value); the nodes keep their own free parameters.
 std::vector<ParameterSet> nodes_with_effects(const std::vector<ParameterSet>& nodes, const ParameterSet& effects_at,
-                                             const std::vector<std::string>& keys);
+                                             const std::vector<EffectTerm>& effects);
 
 // The sizes (offsets from neutral) at which an added effect is measured beyond
 // its step: half the step; the range's end on the step's side when it lies
@@ -54,7 +59,7 @@ class EffectResponses {
   // The baseline's nodes as a reference (their runs are made).
   static Reference baseline_reference(const BaselineFit& base) { return {base.nodes, base.node_predictions}; }
   // The baseline's nodes with the added effects at their fitted values: one batch of runs.
-  Reference reference_with(const BaselineFit& base, const ParameterSet& fitted, const std::vector<std::string>& effect_keys);
+  Reference reference_with(const BaselineFit& base, const ParameterSet& fitted, const std::vector<EffectTerm>& effects);
 
   // Every applicable catalogue effect moved by its physical step at the reference (all in one
   // batch); a step lost in the noise measured again at its range's end. `terms` gets each

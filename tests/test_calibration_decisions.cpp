@@ -11,12 +11,16 @@ namespace {
 TEST(AttributeDecision, AResidualWithinTheNoiseIsNotAttributedEvenToASignificantScore) {
   // Blind pass 6, null-3: chi^2 p 0.128 on the fitted points, corner rounding at adjusted p 0.038.
   EXPECT_EQ(should_attribute(0.128, true, 0.038, 0.05), Attribute::consistent_with_noise);
-  // The same score where the residual is beyond the noise (wall friction low: chi2/nu 1.66 on 31, p ~ 0.011).
-  EXPECT_EQ(should_attribute(0.011, true, 0.038, 0.05), Attribute::yes);
-  EXPECT_EQ(should_attribute(0.011, true, 0.2, 0.05), Attribute::nothing_significant);
-  EXPECT_EQ(should_attribute(0.011, false, 0.0, 0.05), Attribute::nothing_visible);
-  // The boundary belongs to "consistent": p = alpha is not a rejection at level alpha.
+  // The same adjusted p where the residual is beyond the noise (pass 6's wallfriction-low had
+  // chi2/nu 1.66 on 31, p 0.0117).
+  EXPECT_EQ(should_attribute(0.0117, true, 0.038, 0.05), Attribute::yes);
+  EXPECT_EQ(should_attribute(0.0117, true, 0.2, 0.05), Attribute::nothing_significant);
+  EXPECT_EQ(should_attribute(0.0117, false, 0.0, 0.05), Attribute::nothing_visible);
+  // The residual is asked first: within the noise, "consistent" whether anything is visible or not.
+  EXPECT_EQ(should_attribute(0.5, false, 1.0, 0.05), Attribute::consistent_with_noise);
+  // Both boundaries are no rejection: p = alpha does not reject at level alpha.
   EXPECT_EQ(should_attribute(0.05, true, 1e-9, 0.05), Attribute::consistent_with_noise);
+  EXPECT_EQ(should_attribute(0.0117, true, 0.05, 0.05), Attribute::nothing_significant);
 }
 
 TEST(KeepDecision, BicMustFall) {
@@ -26,8 +30,28 @@ TEST(KeepDecision, BicMustFall) {
   EXPECT_EQ(keep_verdict({.bic_before = 10, .bic_after = 12, .held_out_n = 0}, 10), Keep::bic_not_better);
 }
 
+TEST(KeepDecision, WithoutHeldOutPointsAFallingBicIsEnough) {
+  EXPECT_EQ(keep_verdict({.bic_before = 10, .bic_after = 9, .held_out_n = 0}, 10), Keep::keep);
+}
+
+TEST(KeepDecision, HeldOutPointsThatDoNotFallVetoWithoutDecisiveEvidence) {
+  EXPECT_EQ(keep_verdict({.bic_before = 10, .bic_after = 5, .held_out_n = 12, .held_before = 20, .held_after = 20}, 10),
+            Keep::held_out_worse);
+}
+
+TEST(KeepDecision, TheToleratedRiseIsOneStandardDeviationOfTheHeldOutChiSquare) {
+  // n = 12: sd = sqrt(24) = 4.90; a drop of exactly decisive_bic is decisive.
+  const auto with_rise = [](double rise) {
+    return KeepEvidence{.bic_before = 30, .bic_after = 20, .held_out_n = 12, .held_before = 20, .held_after = 20 + rise};
+  };
+  EXPECT_TRUE(decisive(with_rise(0), 10));
+  EXPECT_EQ(keep_verdict(with_rise(4.85), 10), Keep::keep);
+  EXPECT_EQ(keep_verdict(with_rise(4.95), 10), Keep::held_out_worse);
+  EXPECT_FALSE(decisive({.bic_before = 30, .bic_after = 20.01}, 10));
+}
+
 TEST(KeepDecision, DecisiveEvidenceToleratesAHeldOutRiseWithinItsNoise) {
-  // Pass 3's spinning friction: BIC 84.8 -> 17.7, held-out chi^2 11.0 -> 11.3 on 12 points (sd sqrt(24) = 4.9).
+  // Pass 1's spinning friction: BIC 84.8 -> 17.7, held-out chi^2 11.0 -> 11.3 on 12 points (sd sqrt(24) = 4.9).
   const KeepEvidence spinning{.bic_before = 84.8, .bic_after = 17.7, .held_out_n = 12, .held_before = 11.0, .held_after = 11.3};
   EXPECT_TRUE(decisive(spinning, 10));
   EXPECT_EQ(keep_verdict(spinning, 10), Keep::keep);
@@ -52,10 +76,14 @@ TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFit
   // The fitted state: another friction (the fit's, not a node's) and a tilt of 5.4 deg.
   const ParameterSet fitted =
       ParameterSet{}.with("particles.friction_particle", 0.33).with("plane.lateral_tilt_deg", 5.4);
-  const std::vector<ParameterSet> at = nodes_with_effects(nodes, fitted, {"plane.lateral_tilt_deg"});
+  EffectTerm tilt, wall;
+  tilt.key = "plane.lateral_tilt_deg";
+  wall.key = "particles.friction_wall", wall.neutral = 0.24;  // not fitted here: stays at its neutral value
+  const std::vector<ParameterSet> at = nodes_with_effects(nodes, fitted, {tilt, wall});
   ASSERT_EQ(at.size(), 2u);
   for (std::size_t n = 0; n < 2; ++n) {
     EXPECT_DOUBLE_EQ(at[n].get("plane.lateral_tilt_deg", 0), 5.4);
+    EXPECT_DOUBLE_EQ(at[n].get("particles.friction_wall", 0), 0.24);
     // Each node keeps its own free parameters: the finite differences pair runs at the nodes.
     EXPECT_DOUBLE_EQ(at[n].get("particles.friction_particle", 0), nodes[n].get("particles.friction_particle", 0));
   }
