@@ -29,6 +29,7 @@ Score score_signature(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   const Eigen::VectorXd pu = projector_out(X) * u;
   Score s;
   s.projected_norm = pu.norm();
+  s.signature_norm = u.norm();
   if (s.projected_norm == 0) return s;
   const double dot = pu.dot(r), nn = pu.squaredNorm();
   s.statistic = dot * dot / nn;

@@ -32,6 +32,11 @@ struct Score {
   double estimate = 0;      // linearised effect size a^ (units of the signature's denominator)
   double se = 0;            // 1/|u~|
   double projected_norm = 0;// |u~|: how much of the signature survives the projection
+  double signature_norm = 0;// |u|, before it
+  // |u~| / |u|: the share of the signature the fitted parameters cannot mimic. Near 0, the
+  // effect is absorbed by the fit in this design (a rolling resistance by the friction, say):
+  // whatever of it is in the data ends up in the fitted parameters, and no test can see it.
+  double left_by_fit() const { return signature_norm > 0 ? projected_norm / signature_norm : 0.0; }
 };
 
 // The score test of one signature u against the whitened residual r, with the

@@ -71,12 +71,13 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                      i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals));
     for (std::size_t c = 0; c < rd.candidates.size(); ++c) {
       const Candidate& k = rd.candidates[c];
-      o << fmt::format(R"({}{{"effect": {}, "step": {}, "other_step": {}, "other_visibility_p": {}, "visible": {}, "visibility_p": {}, "signature_chi2": {}, "signature_points": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "group": {}}})",
+      o << fmt::format(R"({}{{"effect": {}, "step": {}, "other_step": {}, "other_visibility_p": {}, "visible": {}, "visibility_p": {}, "signature_chi2": {}, "signature_points": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "left_by_fit": {}, "group": {}}})",
                        c ? ", " : "", json_string(k.effect), json_number(k.step),
                        k.other_step != 0 ? json_number(k.other_step) : "null",
                        k.other_step != 0 ? json_number(k.other_visibility_p) : "null", k.visible ? "true" : "false",
                        json_number(k.visibility_p), json_number(k.signature_chi2), k.signature_dof, json_number(k.score.statistic), json_number(k.score.p),
-                       json_number(k.p_adjusted), json_number(k.score.estimate), k.group);
+                       json_number(k.p_adjusted), json_number(k.score.estimate),
+                       k.visible ? json_number(k.score.left_by_fit()) : "null", k.group);
     }
     o << "]}";
   }
@@ -151,15 +152,16 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
   o << errors_row("after, fitted, fresh seeds", r.after.fitted_fresh) << errors_row("after, held out, fresh seeds", r.after.held_out_fresh);
   o << fmt::format("\nParameters before: {}. After: {}. BIC {:.2f} -> {:.2f}.\n", r.before.params.label(), r.after.params.label(),
                    r.before.bic, r.after.bic);
-  o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates. A step whose paired chi2 stays below 4 per fitted point (2 se a point) leaves a signature mostly noise: the effect is moved again to the end of its range (or as far toward it as every point allows) and the step that moved the model more clearly is used (*step -> end*: the end; *step (end tried)*: the first), visible then at half the level (the better of two looks).\n";
+  o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates. A step whose paired chi2 stays below 4 per fitted point (2 se a point) leaves a signature mostly noise: the effect is moved again to the end of its range (or as far toward it as every point allows) and the step that moved the model more clearly is used (*step -> end*: the end; *step (end tried)*: the first), visible then at half the level (the better of two looks). *Left by the fit*: the share of the signature's length that the fitted parameters cannot mimic, |P u| / |u| (whitened): near 0, the effect is absorbed by the fit in this design, and whatever of it the data hold ends up in the fitted parameters; a design that varies what tells them apart is needed to see it.\n";
   for (std::size_t i = 0; i < r.rounds.size(); ++i) {
     const Round& rd = r.rounds[i];
-    o << fmt::format("\n### Round {}\n\n| effect | step | visible (p) | score | p | adjusted p | linearised size | group |\n|---|---|---|---|---|---|---|---|\n", i + 1);
+    o << fmt::format("\n### Round {}\n\n| effect | step | visible (p) | left by the fit | score | p | adjusted p | linearised size | group |\n|---|---|---|---|---|---|---|---|---|\n", i + 1);
     for (const Candidate& c : rd.candidates)
-      o << fmt::format("| {} | {} | {} ({}) | {} | {} | {} | {} | {} |\n", c.effect,
+      o << fmt::format("| {} | {} | {} ({}) | {} | {} | {} | {} | {} | {} |\n", c.effect,
                        step_text(c),
                        c.visible ? "yes" : "no",
                        visibility_text(c),
+                       c.visible ? fmt::format("{:.0f} %", 100 * c.score.left_by_fit()) : "",
                        c.visible ? fmt::format("{:.2f}", c.score.statistic) : "",
                        c.visible ? fmt::format("{:.3g}", c.score.p) : "", c.visible ? fmt::format("{:.3g}", c.p_adjusted) : "",
                        c.visible ? fmt::format("{:.4g} ± {:.2g}", c.neutral + c.score.estimate, c.score.se) : "",

@@ -63,6 +63,15 @@ TEST(Attribution, ProjectionRemovesTheCalibratedDirection) {
   const Eigen::VectorXd pu = projector_out(X) * u;
   EXPECT_NEAR(pu.dot(X.col(0)), 0.0, 1e-9);
   EXPECT_LT(pu.norm(), 0.1 * other.norm() + 1e-12);
+  // The share left by the fit says so: at most 0.1 |other| of a signature of length ~5 |ramp|.
+  const Score s = score_signature(noise(n, 7), X, u);
+  EXPECT_DOUBLE_EQ(s.signature_norm, u.norm());
+  EXPECT_NEAR(s.left_by_fit(), pu.norm() / u.norm(), 1e-12);
+  EXPECT_LT(s.left_by_fit(), 0.1 * other.norm() / u.norm() + 1e-12);
+  // A signature orthogonal to the fitted direction is left whole.
+  Eigen::VectorXd flat = Eigen::VectorXd::Ones(n);
+  flat -= X.col(0) * (X.col(0).dot(flat) / X.col(0).squaredNorm());
+  EXPECT_NEAR(score_signature(noise(n, 7), X, flat).left_by_fit(), 1.0, 1e-9);
   // A residual along the calibrated direction gives the signature no score.
   EXPECT_NEAR(score_signature(X.col(0) * 3.0, X, u).statistic, 0.0, 1e-9);
 }
