@@ -36,6 +36,9 @@ struct Score {
   // |u~| / |u|: the share of the signature the fitted parameters cannot mimic. Near 0, the
   // effect is absorbed by the fit in this design (a rolling resistance by the friction, say):
   // whatever of it is in the data ends up in the fitted parameters, and no test can see it.
+  // Local, at the fitted point: near 1 does not rule out absorption through a large move of
+  // the fitted parameters (blind pass 7's rolling-high: 97 % left, and the friction fit 0.15
+  // above the truth had taken the planted rolling resistance in).
   double left_by_fit() const { return signature_norm > 0 ? projected_norm / signature_norm : 0.0; }
 };
 
