@@ -1,9 +1,18 @@
 // The calibration loop's decisions on numbers (calibrate/decisions.hpp), several of them the
 // blind study's own cases, and where a later round measures an effect's response.
+#include "calibrate/calibration_report.hpp"
 #include "calibrate/decisions.hpp"
 #include "calibrate/effect_responses.hpp"
+#include "studies/report.hpp"
+#include "test_support.hpp"
 
 #include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
 
 namespace gapflow {
 namespace {
@@ -88,6 +97,58 @@ TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFit
     EXPECT_DOUBLE_EQ(at[n].get("particles.friction_particle", 0), nodes[n].get("particles.friction_particle", 0));
   }
   EXPECT_EQ(nodes_with_effects(nodes, fitted, {})[1].label(), nodes[1].label());
+}
+
+// The round table of report.md and summary.json's candidates carry the "left by the fit" share:
+// as many cells as the header has, and summary.json stays valid JSON (parsed by python3).
+TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {
+  const std::string points =
+      "[[point]]\nW_over_d = 4\nobservable = \"exit_offset\"\nvalue = 1\nuncertainty = 0.1\n"
+      "[[point]]\nW_over_d = 5\nobservable = \"exit_offset\"\nvalue = 2\nuncertainty = 0.1\n";
+  const DataFile data = parse_data_file(
+      testing::data_file_head("set = [\"particles.count=30\"]\nreplicates = 2\n") + points, "t.toml",
+      testing::source_path(""));
+  CalibrationResult r;
+  r.data_name = "t";
+  r.model = "2d";
+  for (ModelState* s : {&r.before, &r.after}) {  // a model at both points (points.csv reads them)
+    s->prediction.value = s->prediction.fit = {1.1, 1.9};
+    s->prediction.se_fit = {0.05, 0.05};
+    s->prediction.valid = {true, true};
+    s->whitened = {-1, 1};
+  }
+  Round round;
+  Candidate seen, unseen;
+  seen.effect = "linear_drag", seen.key = "particles.drag_per_s", seen.step = 2, seen.visible = true;
+  seen.score.statistic = 9, seen.score.p = 0.003, seen.score.projected_norm = 0.25, seen.score.signature_norm = 1;
+  unseen.effect = "restitution", unseen.key = "particles.restitution", unseen.step = -0.4;
+  round.candidates = {seen, unseen};
+  round.decision = "test";
+  r.rounds.push_back(round);
+  testing::TempDir dir("gapflow-calibration-report");
+  write_calibration_outputs(data, r, dir.path(), false);
+
+  std::ifstream md(dir / "report.md");
+  std::string line, header, drag_row, restitution_row;
+  while (std::getline(md, line)) {
+    if (line.rfind("| effect |", 0) == 0) header = line;
+    if (line.rfind("| linear_drag |", 0) == 0) drag_row = line;
+    if (line.rfind("| restitution |", 0) == 0) restitution_row = line;
+  }
+  ASSERT_FALSE(header.empty());
+  const auto bars = [](const std::string& s) { return std::count(s.begin(), s.end(), '|'); };
+  EXPECT_NE(header.find("left by the fit"), std::string::npos);
+  EXPECT_EQ(bars(drag_row), bars(header)) << drag_row;
+  EXPECT_EQ(bars(restitution_row), bars(header)) << restitution_row;
+  EXPECT_NE(drag_row.find("| 25 % |"), std::string::npos) << drag_row;
+
+  const std::optional<std::string> python = find_python_with_matplotlib();
+  if (!python) GTEST_SKIP() << "no python3 to parse summary.json";
+  const std::string check = fmt::format(
+      "import json; c = json.load(open('{}'))['rounds'][0]['candidates']; "
+      "assert abs(c[0]['left_by_fit'] - 0.25) < 1e-12 and c[1]['left_by_fit'] is None, c",
+      (dir / "summary.json").string());
+  EXPECT_EQ(run_program({*python, "-c", check}, dir / "python.log"), 0);
 }
 
 }  // namespace
