@@ -457,13 +457,16 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.before.simulated_fresh = fresh[0];
   out.after.simulated_fresh = fresh[1];
 
-  out.poor_fit = out.after.fitted.chi.p < 0.01;
-  if (def.max_effects == 0)
-    out.verdict = out.before.fitted.chi.p >= def.alpha ? "consistent with noise" : "residual not attributed (--max-effects 0)";
-  else if (out.effects.empty())
-    out.verdict = out.before.fitted.chi.p >= def.alpha ? "consistent with noise" : "unexplained residual";
-  else
-    out.verdict = out.poor_fit ? "effect found, poor fit remains" : "effect found";
+  const VerdictEvidence evidence{.attribution_allowed = def.max_effects > 0,
+                                 .effects_added = static_cast<int>(out.effects.size()),
+                                 .fitted_p_before = out.before.fitted.chi.p,
+                                 .fitted_p_after = out.after.fitted.chi.p,
+                                 .held_out_n = out.after.held_out_fresh.n,
+                                 .held_out_fresh_p = out.after.held_out_fresh.chi.p,
+                                 .alpha = def.alpha};
+  out.poor_fit = poor_fit(evidence);
+  out.held_out_beyond_noise = held_out_beyond_noise(evidence);
+  out.verdict = final_verdict(evidence);
   out.runs_simulated = ev.runs_simulated();
   out.runs_reused = ev.runs_reused();
   out.run_seconds = ev.run_seconds();

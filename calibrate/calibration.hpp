@@ -119,6 +119,7 @@ struct CalibrationResult {
   std::string verdict;             // "consistent with noise" | "effect found" | "unexplained residual" | ...
   std::string summary;             // one paragraph for people
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
+  bool held_out_beyond_noise = false;  // the held-out points' chi^2 p < alpha after everything (fresh seeds)
   int runs_simulated = 0, runs_reused = 0;
   double run_seconds = 0, wall_seconds = 0;
   std::vector<std::string> log;    // every decision in order

@@ -51,7 +51,8 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
   o << fmt::format("  \"data\": {},\n  \"data_file\": {},\n  \"model\": {},\n  \"observable\": {},\n  \"observables\": {},\n",
                    json_string(r.data_name), json_string(data.file.string()), json_string(r.model),
                    json_string(to_string(data.observable)), json_string(data.observables_text()));
-  o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n", json_string(r.verdict), r.poor_fit ? "true" : "false");
+  o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n  \"held_out_beyond_noise\": {},\n", json_string(r.verdict),
+                   r.poor_fit ? "true" : "false", r.held_out_beyond_noise ? "true" : "false");
   o << "  \"effects\": [";
   for (std::size_t i = 0; i < r.effects.size(); ++i) {
     const AddedEffect& e = r.effects[i];
@@ -144,6 +145,12 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
   if (r.poor_fit)
     o << (r.effects.empty() ? " The fit is poor (chi2 p < 0.01 on the fitted points)."
                             : " The fit is still poor after the additions (chi2 p < 0.01): read any attribution with care.");
+  if (r.held_out_beyond_noise)
+    o << fmt::format(" The held-out points, simulated on fresh seeds, are beyond the noise (chi2 p = {:.3g}){}.",
+                     r.after.held_out_fresh.chi.p,
+                     r.effects.empty() && !r.poor_fit
+                         ? ": the model is missing something that the fitted parameters take in where the data were fitted"
+                         : ": the model is still missing something where the design was not fitted");
   o << "\n\n## Error before and after\n\nRMSE on the fit scale (log scale: about a relative error); RMS of the whitened residual (1 = at the noise floor); chi2/nu with its p-value (fitted points: nu = n - fitted parameters; held-out points: nu = n).\n\n";
   o << "| points | n | RMSE | RMS/noise | chi2 / nu | p |\n|---|---|---|---|---|---|\n";
   o << errors_row("before, fitted", r.before.fitted) << errors_row("before, held out", r.before.held_out);

@@ -1,6 +1,7 @@
 #include "calibrate/decisions.hpp"
 
 #include <cmath>
+#include <string>
 
 namespace gapflow {
 
@@ -22,6 +23,28 @@ Keep keep_verdict(const KeepEvidence& e, double decisive_bic) {
   const bool held_better = e.held_out_n == 0 || e.held_after < e.held_before ||
                            (decisive(e, decisive_bic) && e.held_after - e.held_before <= std::sqrt(2.0 * e.held_out_n));
   return held_better ? Keep::keep : Keep::held_out_worse;
+}
+
+bool held_out_beyond_noise(const VerdictEvidence& e) {
+  return e.held_out_n > 0 && e.held_out_fresh_p < e.alpha;
+}
+
+bool poor_fit(const VerdictEvidence& e) { return e.fitted_p_after < e.poor_fit_p; }
+
+std::string final_verdict(const VerdictEvidence& e) {
+  const bool fitted_within = e.fitted_p_before >= e.alpha;
+  const bool held_beyond = held_out_beyond_noise(e);
+  if (!e.attribution_allowed) {
+    if (!fitted_within) return "residual not attributed (--max-effects 0)";
+    return held_beyond ? "held-out points beyond the noise, not attributed (--max-effects 0)" : "consistent with noise";
+  }
+  if (e.effects_added == 0) {
+    if (!fitted_within) return "unexplained residual";
+    // The fitted points pass: whatever the data hold beyond the model, the fitted parameters took it in there.
+    return held_beyond ? "unexplained residual: the held-out points are beyond the noise" : "consistent with noise";
+  }
+  if (poor_fit(e)) return "effect found, poor fit remains";
+  return held_beyond ? "effect found; the held-out points are still beyond the noise" : "effect found";
 }
 
 }  // namespace gapflow

@@ -32,6 +32,50 @@ TEST(AttributeDecision, AResidualWithinTheNoiseIsNotAttributedEvenToASignificant
   EXPECT_EQ(should_attribute(0.0117, true, 0.05, 0.05), Attribute::nothing_significant);
 }
 
+TEST(FinalVerdict, ConsistentWithNoiseNeedsTheHeldOutPointsWithinTheNoiseToo) {
+  // Blind pass 7, rolling-high: fitted chi^2 p 0.157, held-out (fresh seeds) p 0.00514, no effect
+  // added. It was reported "consistent with noise"; the friction fit had absorbed the effect.
+  VerdictEvidence rolling_high{.fitted_p_before = 0.157, .fitted_p_after = 0.157, .held_out_n = 12,
+                               .held_out_fresh_p = 0.00514};
+  EXPECT_TRUE(held_out_beyond_noise(rolling_high));
+  EXPECT_EQ(final_verdict(rolling_high), "unexplained residual: the held-out points are beyond the noise");
+  // Pass 7's null-4, the lowest held-out p of its nulls (0.23): still consistent.
+  VerdictEvidence null_4{.fitted_p_before = 0.0865, .fitted_p_after = 0.0865, .held_out_n = 12, .held_out_fresh_p = 0.23};
+  EXPECT_EQ(final_verdict(null_4), "consistent with noise");
+  // p = alpha does not reject; without held-out points there is nothing to reject.
+  VerdictEvidence at_alpha = null_4;
+  at_alpha.held_out_fresh_p = 0.05;
+  EXPECT_EQ(final_verdict(at_alpha), "consistent with noise");
+  VerdictEvidence none_held = rolling_high;
+  none_held.held_out_n = 0;
+  EXPECT_FALSE(held_out_beyond_noise(none_held));
+  EXPECT_EQ(final_verdict(none_held), "consistent with noise");
+  // The fitted points beyond the noise and nothing added: unexplained, whatever the held-out say.
+  VerdictEvidence beyond{.fitted_p_before = 0.001, .fitted_p_after = 0.001, .held_out_n = 12, .held_out_fresh_p = 0.6};
+  EXPECT_EQ(final_verdict(beyond), "unexplained residual");
+}
+
+TEST(FinalVerdict, AnEffectFoundIsFlaggedWhenTheFitOrTheHeldOutPointsStayPoor) {
+  // Pass 7's tilt-low: tilt added, fitted p after 0.99, held-out (fresh) p after 0.00262.
+  VerdictEvidence tilt_low{.effects_added = 1, .fitted_p_before = 4.4e-9, .fitted_p_after = 0.99, .held_out_n = 12,
+                           .held_out_fresh_p = 0.00262};
+  EXPECT_FALSE(poor_fit(tilt_low));
+  EXPECT_EQ(final_verdict(tilt_low), "effect found; the held-out points are still beyond the noise");
+  tilt_low.held_out_fresh_p = 0.49;
+  EXPECT_EQ(final_verdict(tilt_low), "effect found");
+  // The fitted points still beyond 0.01 after the additions (pass 7's wallfriction-high, p 0.0094).
+  VerdictEvidence poor{.effects_added = 1, .fitted_p_before = 1e-4, .fitted_p_after = 0.0094, .held_out_n = 12,
+                       .held_out_fresh_p = 0.08};
+  EXPECT_TRUE(poor_fit(poor));
+  EXPECT_EQ(final_verdict(poor), "effect found, poor fit remains");
+  // A fit alone (--max-effects 0) still reports the held-out points.
+  VerdictEvidence fit_only{.attribution_allowed = false, .fitted_p_before = 0.3, .fitted_p_after = 0.3, .held_out_n = 12,
+                           .held_out_fresh_p = 0.001};
+  EXPECT_EQ(final_verdict(fit_only), "held-out points beyond the noise, not attributed (--max-effects 0)");
+  fit_only.fitted_p_before = 0.001;
+  EXPECT_EQ(final_verdict(fit_only), "residual not attributed (--max-effects 0)");
+}
+
 TEST(KeepDecision, BicMustFall) {
   EXPECT_EQ(keep_verdict({.bic_before = -184.5, .bic_after = -184.5, .held_out_n = 12, .held_before = 14, .held_after = 10},
                          10),
