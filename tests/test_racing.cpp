@@ -249,6 +249,13 @@ TEST(ScreenStudy, TinyMapRunsDecidesResumesAndReports) {
   EXPECT_NE(md.find("Screen: where does an obstruction raise J?"), std::string::npos);
   EXPECT_NE(md.find("Budget: the race against a fixed grid"), std::string::npos);
   EXPECT_NE(md.find("fresh"), std::string::npos);
+  // The mechanism column: a survivor's row ends with its flowing-rate ratio and interval.
+  EXPECT_NE(md.find("| J_flowing/J_flowing,0 [95 %] |"), std::string::npos) << md;
+  const std::size_t survivor = md.find("| survivor: J/J_0 ");
+  ASSERT_NE(survivor, std::string::npos) << md;
+  const std::string row = md.substr(survivor, md.find('\n', survivor) - survivor);
+  EXPECT_EQ(std::count(row.begin(), row.end(), '['), 2) << row;  // J/J_0's interval, then J_flowing's
+  EXPECT_EQ(row.substr(row.size() - 3), "] |") << row;
   const std::string csv = read_all(dir / "report" / "decisions.csv");
   EXPECT_EQ(csv.rfind("round,cell,n,ratio,lower,upper,best_lower,decision\n", 0), 0u) << csv;
   EXPECT_NE(csv.find("\n1,\"cylinder size 2 d, D 1 d, W 4 d\",2,"), std::string::npos) << csv;
