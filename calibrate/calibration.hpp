@@ -116,7 +116,8 @@ struct CalibrationResult {
   ModelState before, after;       // prediction = the response surface (calibrate/fit.hpp) at params
   std::vector<Round> rounds;
   std::vector<AddedEffect> effects;
-  std::string verdict;             // "consistent with noise" | "effect found" | "unexplained residual" | ...
+  std::string verdict;             // final_verdict (calibrate/decisions.hpp): "consistent with noise" | "effect found" |
+                                   // "unexplained residual" | ... (every string listed there)
   std::string summary;             // one paragraph for people
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
   bool held_out_beyond_noise = false;  // the held-out points' chi^2 p < alpha after everything (fresh seeds)

@@ -145,12 +145,16 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
   if (r.poor_fit)
     o << (r.effects.empty() ? " The fit is poor (chi2 p < 0.01 on the fitted points)."
                             : " The fit is still poor after the additions (chi2 p < 0.01): read any attribution with care.");
-  if (r.held_out_beyond_noise)
+  if (r.held_out_beyond_noise) {
+    // Why they matter depends on what the fitted points said.
+    const char* reading =
+        !r.effects.empty() ? ": the model is likely still missing something where the design was not fitted"
+        : r.verdict == "unexplained residual: the held-out points are beyond the noise"
+            ? ": the model likely misses something that the fitted parameters take in where the data were fitted"
+            : ": the model misses something at the fitted and the held-out points alike";
     o << fmt::format(" The held-out points, simulated on fresh seeds, are beyond the noise (chi2 p = {:.3g}){}.",
-                     r.after.held_out_fresh.chi.p,
-                     r.effects.empty() && !r.poor_fit
-                         ? ": the model is missing something that the fitted parameters take in where the data were fitted"
-                         : ": the model is still missing something where the design was not fitted");
+                     r.after.held_out_fresh.chi.p, reading);
+  }
   o << "\n\n## Error before and after\n\nRMSE on the fit scale (log scale: about a relative error); RMS of the whitened residual (1 = at the noise floor); chi2/nu with its p-value (fitted points: nu = n - fitted parameters; held-out points: nu = n).\n\n";
   o << "| points | n | RMSE | RMS/noise | chi2 / nu | p |\n|---|---|---|---|---|---|\n";
   o << errors_row("before, fitted", r.before.fitted) << errors_row("before, held out", r.before.held_out);
