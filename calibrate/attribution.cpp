@@ -76,6 +76,22 @@ ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_par
   return c;
 }
 
+ChiSquare held_out_chi_square(const Eigen::VectorXd& r, const Eigen::MatrixXd& G, const Eigen::MatrixXd& X) {
+  const Eigen::Index n = r.size();
+  ChiSquare c;
+  c.dof = static_cast<int>(n);
+  if (n == 0) return c;
+  Eigen::MatrixXd C = Eigen::MatrixXd::Identity(n, n);
+  if (X.cols() > 0 && G.cols() == X.cols()) {
+    // (X^T X)^+ : a parameter the fitted points do not constrain adds nothing rather than infinity.
+    const Eigen::MatrixXd sigma = (X.transpose() * X).completeOrthogonalDecomposition().pseudoInverse();
+    C += G * sigma * G.transpose();
+  }
+  c.chi2 = r.dot(C.ldlt().solve(r));
+  c.p = 1 - chi_square_cdf(c.chi2, c.dof);
+  return c;
+}
+
 double bic(double minus_two_log_likelihood, int parameters, int points) {
   return minus_two_log_likelihood + parameters * std::log(static_cast<double>(points));
 }

@@ -66,6 +66,15 @@ struct ChiSquare {
 };
 ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_parameters);
 
+// The held-out points' chi^2 with the fitted parameters' uncertainty carried to them.
+// Linearised, with X (fitted points) and G (held-out points) the whitened sensitivities of
+// the prediction to the k fitted parameters, the least-squares estimate has covariance
+// (X^T X)^-1 in these units, and a held-out residual r whose noise is independent of the
+// fit (other points, fresh seeds) has covariance C = I + G (X^T X)^-1 G^T: r^T C^-1 r ~
+// chi^2(n) for a correct model. With C = I (chi_square_of) the test rejects a correct
+// model too often wherever the design extrapolates (large G).
+ChiSquare held_out_chi_square(const Eigen::VectorXd& r, const Eigen::MatrixXd& G, const Eigen::MatrixXd& X);
+
 // Bayesian information criterion for Gaussian errors: -2 ln L + k ln n (lower is better);
 // with errors of known scale, -2 ln L is chi^2 up to a constant.
 double bic(double minus_two_log_likelihood, int parameters, int points);

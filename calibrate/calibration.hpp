@@ -120,7 +120,10 @@ struct CalibrationResult {
                                    // "unexplained residual" | ... (every string listed there)
   std::string summary;             // one paragraph for people
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
-  bool held_out_beyond_noise = false;  // the held-out points' chi^2 p < alpha after everything (fresh seeds)
+  // The held-out points after everything (fresh seeds), their chi^2 with the fitted parameters'
+  // uncertainty carried to them (attribution.hpp held_out_chi_square): the verdict's test.
+  ChiSquare held_out_fresh_fit_aware;
+  bool held_out_beyond_noise = false;  // its p < alpha
   int runs_simulated = 0, runs_reused = 0;
   double run_seconds = 0, wall_seconds = 0;
   std::vector<std::string> log;    // every decision in order

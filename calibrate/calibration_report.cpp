@@ -53,6 +53,9 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                    json_string(to_string(data.observable)), json_string(data.observables_text()));
   o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n  \"held_out_beyond_noise\": {},\n", json_string(r.verdict),
                    r.poor_fit ? "true" : "false", r.held_out_beyond_noise ? "true" : "false");
+  o << fmt::format("  \"held_out_fresh_fit_aware\": {{\"chi2\": {}, \"dof\": {}, \"p\": {}}},\n",
+                   json_number(r.held_out_fresh_fit_aware.chi2), r.held_out_fresh_fit_aware.dof,
+                   json_number(r.held_out_fresh_fit_aware.p));
   o << "  \"effects\": [";
   for (std::size_t i = 0; i < r.effects.size(); ++i) {
     const AddedEffect& e = r.effects[i];
@@ -152,8 +155,9 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
         : r.verdict == "unexplained residual: the held-out points are beyond the noise"
             ? ": the model likely misses something that the fitted parameters take in where the data were fitted"
             : ": the model misses something at the fitted and the held-out points alike";
-    o << fmt::format(" The held-out points, simulated on fresh seeds, are beyond the noise (chi2 p = {:.3g}){}.",
-                     r.after.held_out_fresh.chi.p, reading);
+    o << fmt::format(" The held-out points, simulated on fresh seeds, are beyond the noise (chi2 p = {:.3g}, the fitted "
+                     "parameters' uncertainty included){}.",
+                     r.held_out_fresh_fit_aware.p, reading);
   }
   o << "\n\n## Error before and after\n\nRMSE on the fit scale (log scale: about a relative error); RMS of the whitened residual (1 = at the noise floor); chi2/nu with its p-value (fitted points: nu = n - fitted parameters; held-out points: nu = n).\n\n";
   o << "| points | n | RMSE | RMS/noise | chi2 / nu | p |\n|---|---|---|---|---|---|\n";
@@ -161,6 +165,10 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
   o << errors_row("before, fitted, fresh seeds", r.before.fitted_fresh) << errors_row("before, held out, fresh seeds", r.before.held_out_fresh);
   o << errors_row("after, fitted", r.after.fitted) << errors_row("after, held out", r.after.held_out);
   o << errors_row("after, fitted, fresh seeds", r.after.fitted_fresh) << errors_row("after, held out, fresh seeds", r.after.held_out_fresh);
+  if (r.held_out_fresh_fit_aware.dof > 0)
+    o << fmt::format("| after, held out, fresh seeds, the fit's uncertainty included (the verdict's test) | {} | | | {:.2f} / {} = {:.2f} | {:.3g} |\n",
+                     r.held_out_fresh_fit_aware.dof, r.held_out_fresh_fit_aware.chi2, r.held_out_fresh_fit_aware.dof,
+                     r.held_out_fresh_fit_aware.per_dof(), r.held_out_fresh_fit_aware.p);
   o << fmt::format("\nParameters before: {}. After: {}. BIC {:.2f} -> {:.2f}.\n", r.before.params.label(), r.after.params.label(),
                    r.before.bic, r.after.bic);
   o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates. A step whose paired chi2 stays below 4 per fitted point (2 se a point) leaves a signature mostly noise: the effect is moved again to the end of its range (or as far toward it as every point allows) and the step that moved the model more clearly is used (*step -> end*: the end; *step (end tried)*: the first), visible then at half the level (the better of two looks). *Left by the fit*: the share of the signature's length that the fitted parameters cannot mimic, |P u| / |u| (whitened): near 0, the effect is absorbed by the fit in this design, and whatever of it the data hold ends up in the fitted parameters; a design that varies what tells them apart is needed to see it.\n";

@@ -1,5 +1,6 @@
 // The calibration loop's decisions on numbers (calibrate/decisions.hpp), several of them the
 // blind study's own cases, and where a later round measures an effect's response.
+#include "calibrate/attribution.hpp"
 #include "calibrate/calibration_report.hpp"
 #include "calibrate/decisions.hpp"
 #include "calibrate/effect_responses.hpp"
@@ -12,6 +13,8 @@
 
 #include <algorithm>
 #include <fstream>
+#include <iostream>
+#include <random>
 #include <sstream>
 
 namespace gapflow {
@@ -33,10 +36,11 @@ TEST(AttributeDecision, AResidualWithinTheNoiseIsNotAttributedEvenToASignificant
 }
 
 TEST(FinalVerdict, ConsistentWithNoiseNeedsTheHeldOutPointsWithinTheNoiseToo) {
-  // Blind pass 7, rolling-high: fitted chi^2 p 0.157, held-out (fresh seeds) p 0.00514, no effect
+  // Blind pass 7, rolling-high: fitted chi^2 p 0.157, held-out (fresh seeds, the fit's uncertainty
+  // included) p 0.00648, no effect
   // added. It was reported "consistent with noise"; the friction fit had absorbed the effect.
   VerdictEvidence rolling_high{.fitted_p_before = 0.157, .fitted_p_after = 0.157, .held_out_n = 12,
-                               .held_out_fresh_p = 0.00514};
+                               .held_out_fresh_p = 0.00648};
   EXPECT_TRUE(held_out_beyond_noise(rolling_high));
   EXPECT_EQ(final_verdict(rolling_high), "unexplained residual: the held-out points are beyond the noise");
   // Pass 7's null-4, the lowest held-out p of its nulls (0.23): still consistent.
@@ -56,9 +60,9 @@ TEST(FinalVerdict, ConsistentWithNoiseNeedsTheHeldOutPointsWithinTheNoiseToo) {
 }
 
 TEST(FinalVerdict, AnEffectFoundIsFlaggedWhenTheFitOrTheHeldOutPointsStayPoor) {
-  // Pass 7's tilt-low: tilt added, fitted p after 0.99, held-out (fresh) p after 0.00262.
+  // Pass 7's tilt-low: tilt added, fitted p after 0.99, held-out (fresh, fit-aware) p after 0.00519.
   VerdictEvidence tilt_low{.effects_added = 1, .fitted_p_before = 4.4e-9, .fitted_p_after = 0.99, .held_out_n = 12,
-                           .held_out_fresh_p = 0.00262};
+                           .held_out_fresh_p = 0.00519};
   EXPECT_FALSE(poor_fit(tilt_low));
   EXPECT_EQ(final_verdict(tilt_low), "effect found; the held-out points are still beyond the noise");
   tilt_low.held_out_fresh_p = 0.49;
@@ -74,6 +78,44 @@ TEST(FinalVerdict, AnEffectFoundIsFlaggedWhenTheFitOrTheHeldOutPointsStayPoor) {
   EXPECT_EQ(final_verdict(fit_only), "held-out points beyond the noise, not attributed (--max-effects 0)");
   fit_only.fitted_p_before = 0.001;
   EXPECT_EQ(final_verdict(fit_only), "residual not attributed (--max-effects 0)");
+}
+
+// Held-out points beyond the fitted range of a straight line y = a + b x (unit noise):
+// the plain chi^2(n) test of their residual rejects a correct model far too often, the
+// one that carries the fit's uncertainty holds its level, and both still see a missing term.
+TEST(HeldOutTest, CarryingTheFitsUncertaintyHoldsItsLevelWhereTheDesignExtrapolates) {
+  std::mt19937 rng(20261124);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const int n_fit = 12, n_held = 6, reps = 4000;
+  Eigen::MatrixXd X(n_fit, 2), G(n_held, 2);
+  for (int i = 0; i < n_fit; ++i) X.row(i) << 1.0, i / double(n_fit - 1);  // x in [0, 1]
+  for (int i = 0; i < n_held; ++i) G.row(i) << 1.0, 2.0 + i / 2.0;        // x in [2, 4.5]
+  auto rejections = [&](double curvature) {
+    int plain = 0, aware = 0;
+    for (int rep = 0; rep < reps; ++rep) {
+      Eigen::VectorXd y(n_fit), yh(n_held);
+      for (int i = 0; i < n_fit; ++i) y(i) = 1 + 2 * X(i, 1) + curvature * X(i, 1) * X(i, 1) + noise(rng);
+      for (int i = 0; i < n_held; ++i) yh(i) = 1 + 2 * G(i, 1) + curvature * G(i, 1) * G(i, 1) + noise(rng);
+      const Eigen::VectorXd theta = X.colPivHouseholderQr().solve(y);
+      const Eigen::VectorXd r = yh - G * theta;
+      plain += chi_square_of(r, 0).p < 0.05;
+      aware += held_out_chi_square(r, G, X).p < 0.05;
+    }
+    return std::pair{plain / double(reps), aware / double(reps)};
+  };
+  const auto [plain_null, aware_null] = rejections(0.0);
+  EXPECT_GT(plain_null, 0.25) << "the plain test should over-reject here";
+  EXPECT_NEAR(aware_null, 0.05, 0.012);  // binomial se 0.0034 at 4000 draws
+  const auto [plain_bent, aware_bent] = rejections(1.0);
+  EXPECT_GT(aware_bent, 0.8) << "a missing curvature must still show";
+  EXPECT_GE(plain_bent, aware_bent);
+  std::cout << "held-out test rejections: correct model plain " << plain_null << ", fit-aware " << aware_null
+            << "; missing curvature plain " << plain_bent << ", fit-aware " << aware_bent << "\n";
+  // No fitted parameters: the plain test. No held-out points: nothing to test.
+  const Eigen::VectorXd r = Eigen::VectorXd::Constant(n_held, 1.5);
+  EXPECT_DOUBLE_EQ(held_out_chi_square(r, Eigen::MatrixXd(n_held, 0), Eigen::MatrixXd(n_fit, 0)).chi2,
+                   chi_square_of(r, 0).chi2);
+  EXPECT_EQ(held_out_chi_square(Eigen::VectorXd(0), Eigen::MatrixXd(0, 2), X).p, 1.0);
 }
 
 TEST(KeepDecision, BicMustFall) {
