@@ -71,8 +71,10 @@ ChiSquare chi_square_of(const Eigen::VectorXd& whitened_residual, int fitted_par
 // the prediction to the k fitted parameters, the least-squares estimate has covariance
 // (X^T X)^-1 in these units, and a held-out residual r whose noise is independent of the
 // fit (other points, fresh seeds) has covariance C = I + G (X^T X)^-1 G^T: r^T C^-1 r ~
-// chi^2(n) for a correct model. With C = I (chi_square_of) the test rejects a correct
-// model too often wherever the design extrapolates (large G).
+// chi^2(n) for a correct model whose held-out points are independent of each other (the
+// observables of one design point share their runs: in blind pass 7 |rho| <= 0.25, which
+// this, like every chi^2 of the loop, neglects). With C = I (chi_square_of) the test rejects
+// a correct model too often wherever the design extrapolates (large G).
 ChiSquare held_out_chi_square(const Eigen::VectorXd& r, const Eigen::MatrixXd& G, const Eigen::MatrixXd& X);
 
 // Bayesian information criterion for Gaussian errors: -2 ln L + k ln n (lower is better);

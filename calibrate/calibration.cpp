@@ -137,15 +137,24 @@ Eigen::VectorXd fitted_whitened(const DataFile& data, const Prediction& at, cons
 
 // The final state's held-out chi^2 on fresh seeds, with the fitted parameters' (free and added
 // effects') uncertainty carried to the held-out points (held_out_chi_square): sensitivities by
-// central differences on the final surface, over 1e-3 of each parameter's range.
+// central differences on the final surface, over 1e-3 of each parameter's range. A parameter
+// the fit left at an end of its range (twin-3d's rolling contact at 1) is left out: the
+// linear variance would widen C for a direction the fit cannot move in.
 ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const ModelState& after,
                              const Prediction& fresh) {
-  std::vector<std::pair<std::string, double>> keys;  // key, step
-  for (const FreeParameter& f : data.free) keys.emplace_back(f.key, 1e-3 * (f.hi - f.lo));
-  for (const EffectTerm& e : surface.effects) keys.emplace_back(e.key, 1e-3 * (e.hi - e.lo));
+  struct Key {
+    std::string key;
+    double at, h;
+  };
+  std::vector<Key> keys;
+  auto consider = [&](const std::string& key, double fallback, double lo, double hi) {
+    const double at = after.params.get(key, fallback), h = 1e-3 * (hi - lo);
+    if (at - h > lo && at + h < hi) keys.push_back({key, at, h});
+  };
+  for (const FreeParameter& f : data.free) consider(f.key, 0.5 * (f.lo + f.hi), f.lo, f.hi);
+  for (const EffectTerm& e : surface.effects) consider(e.key, e.neutral, e.lo, e.hi);
   std::vector<std::vector<double>> slope;  // [key][point], fit scale per key unit
-  for (const auto& [key, h] : keys) {
-    const double at = after.params.get(key, 0.0);
+  for (const auto& [key, at, h] : keys) {
     const Prediction up = surface.predict_fit(after.params.with(key, at + h));
     const Prediction dn = surface.predict_fit(after.params.with(key, at - h));
     std::vector<double> d;
@@ -162,11 +171,12 @@ ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const
     const std::vector<double>& d = slope[static_cast<std::size_t>(j)];
     for (std::size_t a = 0; a < fitted.size(); ++a) {
       const std::size_t i = fitted[a];
-      X(static_cast<Eigen::Index>(a), j) = after.prediction.valid[i] ? d[i] / total_sigma(data, after.prediction, i) : 0.0;
+      X(static_cast<Eigen::Index>(a), j) =
+          after.prediction.valid[i] && surface.valid[i] ? d[i] / total_sigma(data, after.prediction, i) : 0.0;
     }
     for (std::size_t b = 0; b < held.size(); ++b) {
       const std::size_t i = held[b];
-      G(static_cast<Eigen::Index>(b), j) = fresh.valid[i] ? d[i] / total_sigma(data, fresh, i) : 0.0;
+      G(static_cast<Eigen::Index>(b), j) = fresh.valid[i] && surface.valid[i] ? d[i] / total_sigma(data, fresh, i) : 0.0;
     }
   }
   for (std::size_t b = 0; b < held.size(); ++b) r(static_cast<Eigen::Index>(b)) = w[held[b]];

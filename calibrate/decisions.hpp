@@ -18,13 +18,14 @@
 //    on fresh seeds) to be within the noise as well as the fitted ones: an effect the
 //    fitted parameters absorb leaves the fitted points at the noise and shows only
 //    where the design extrapolates (blind pass 7, before this rule: rolling-high,
-//    friction fitted 0.446 for a true 0.296, fitted chi^2 p 0.157, held-out p 0.006,
+//    friction fitted 0.446 for a true 0.296, fitted chi^2 p 0.157, held-out p 0.005,
 //    reported "consistent with noise"; corners-low, held-out p 0.003). The held-out
 //    chi^2 carries the fitted parameters' uncertainty (attribution.hpp
 //    held_out_chi_square): without it a correct model's extrapolated points reject far
 //    too often (68 % at level 0.05 in tests/test_calibration_decisions.cpp's line).
 //    Two tests at level alpha: "unexplained" on a correct model at a rate <= 2 alpha
-//    as far as the linearisation holds.
+//    as far as the linearisation holds and the points are independent (the observables
+//    of one design point share runs; the loop's chi^2 neglects that everywhere).
 #pragma once
 
 #include <string>

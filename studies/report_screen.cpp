@@ -150,7 +150,7 @@ std::vector<CellResult> cell_results(const StudyDef& study, const ScreenGrid& gr
       // Whether J rose through fewer clogs or through a faster flow: the flowing rates' ratio.
       const ScreenCell& base = grid.baselines[static_cast<std::size_t>(c.cell->gap)];
       const auto b = runs.find({base.series, base.axes_json});
-      if (b != runs.end())
+      if (c.final.complete && b != runs.end())
         c.flowing = ratio_interval(flowing_rates(cell_runs, p.max, p.max + p.confirm),
                                    flowing_rates(b->second, p.max, p.max + p.confirm), p.confidence);
     }
@@ -212,15 +212,18 @@ TextTable cells_table(const std::vector<CellResult>& cells, const RacingParams& 
     t.rows.push_back({c.cell->series, fmt_num(c.cell->size_d, 3), fmt_num(c.cell->distance_d, 3),
                       fmt_num(c.cell->gap_d, 3), fmt::format("{}", c.runs),
                       c.clogs_per_100 >= 0 ? fmt_num(c.clogs_per_100, 3) : "n/a", c.cut, fate_text(c, p),
-                      c.flowing.valid ? fmt::format("{:.3f} [{:.3f}, {:.3f}]", c.flowing.ratio, c.flowing.lo, c.flowing.hi)
+                      c.flowing.valid ? fmt::format("{:.3f} [{:.3f}, {:.3f}] ({}/{} runs)", c.flowing.ratio,
+                                                    c.flowing.lo, c.flowing.hi, c.flowing.n_cell, c.flowing.n_base)
                                       : ""});
   t.notes.push_back(
       "Clogs and \"not emptied by T\" count the runs the cell's J/J_0 comes from (dropped: its screening runs; "
       "survivors: its confirmation runs). A run that did not empty enters with passed / T; the spheres it left "
       "behind say whether a clog held the pile (hundreds) or the run was cut while flowing. The last column (survivors, "
-      "confirmation runs, delta-method interval) is the mechanism: J_flowing counts only the time spheres flow (the "
-      "clogs' time removed), so a J/J_0 above 1 with J_flowing/J_flowing,0 at 1 comes from fewer or shorter clogs, "
-      "and one with J_flowing/J_flowing,0 above 1 from a faster flow between them.");
+      "once their confirmation runs are all stored; delta-method interval; runs of the cell / of its baseline that "
+      "had a flowing rate: a run with no avalanche of two or more spheres has none) reads the mechanism: J_flowing "
+      "counts only the time spheres flow (stops longer than the clog threshold removed, and the time before the first "
+      "crossing not counted), J_T all of it. J/J_0 above 1 with J_flowing/J_flowing,0 near 1 points to fewer or "
+      "shorter clogs (or an earlier first arrival); J_flowing/J_flowing,0 above 1 to a faster flow between them.");
   return t;
 }
 

@@ -255,7 +255,7 @@ TEST(ScreenStudy, TinyMapRunsDecidesResumesAndReports) {
   ASSERT_NE(survivor, std::string::npos) << md;
   const std::string row = md.substr(survivor, md.find('\n', survivor) - survivor);
   EXPECT_EQ(std::count(row.begin(), row.end(), '['), 2) << row;  // J/J_0's interval, then J_flowing's
-  EXPECT_EQ(row.substr(row.size() - 3), "] |") << row;
+  EXPECT_EQ(row.substr(row.size() - 8), " runs) |") << row;
   const std::string csv = read_all(dir / "report" / "decisions.csv");
   EXPECT_EQ(csv.rfind("round,cell,n,ratio,lower,upper,best_lower,decision\n", 0), 0u) << csv;
   EXPECT_NE(csv.find("\n1,\"cylinder size 2 d, D 1 d, W 4 d\",2,"), std::string::npos) << csv;
