@@ -109,7 +109,8 @@ std::string map_text(const CellResult& c) {
   switch (c.state) {
     case HeatCell::State::infeasible: return "n/f";
     case HeatCell::State::missing: return "?";
-    case HeatCell::State::dropped: return fmt::format("<{:.3g} r{}", c.last.upper, c.dropped_round + 1);
+    case HeatCell::State::dropped:  // an upper bound of 0 (nothing passed in any run) or below: "<0.001"
+      return fmt::format("<{:.3g} r{}", std::max(c.last.upper, 0.001), c.dropped_round + 1);
     case HeatCell::State::final: break;
   }
   if (!c.final.ratio.valid) return "?";
