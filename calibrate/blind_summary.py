@@ -89,6 +89,20 @@ def main(out):
                 covered.append(exact[0]["lo95"] <= p["value"] <= exact[0]["hi95"])
         signal = truth.get("signal")
         b, a = summary["before"], summary["after"]
+        # The loop's best-case detectable departure for each planted effect (summary.json
+        # "detectability", from the commit after pass 7 on): was the planted size below it? None
+        # where the loop gives no bound (the candidate's step was not visible: "unseen"; or no
+        # departure is detectable: min_departure null, counted as below). Two planted effects:
+        # below only if both are.
+        bounds = {d["effect"]: d for d in summary.get("detectability", [])}
+
+        def below_bound(p):
+            d = bounds.get(p["name"])
+            if d is None or p["neutral"] is None or not d["visible"]:
+                return None
+            return d["min_departure"] is None or abs(p["value"] - p["neutral"]) < d["min_departure"]
+        below = [below_bound(p) for p in planted]
+        unseen_step = any(p["name"] in bounds and not bounds[p["name"]]["visible"] for p in planted)
         rows.append({
             "case": case,
             "truth": label,
@@ -109,6 +123,8 @@ def main(out):
             "heldout_rms_sigma_after": a["held_out_fresh"]["rms_whitened"],
             # The verdict's held-out test (fresh seeds, after everything); absent before pass 8.
             "heldout_beyond_noise": summary.get("held_out_beyond_noise", ""),
+            "below_best_case_bound": ("unseen" if unseen_step else all(below) if below and None not in below else "")
+                                     if bounds else "",
             "signal_chi2": signal["chi2"] if signal else "",
             "oracle_power": signal["oracle_power"] if signal else "",
             "visible": (signal["oracle_power"] >= VISIBLE_POWER) if signal else "",
@@ -151,6 +167,12 @@ def main(out):
     ident_visible = sum(1 for r in visible if r["identified"] is True)
     hidden_none = sum(1 for r in hidden if r["said"] == "none")
     hidden_unexplained = sum(1 for r in hidden if r["said"] == "unexplained")
+    missed = [r for r in single if r["identified"] is not True]
+    bound_known = any(r["below_best_case_bound"] != "" for r in single)
+    missed_below = [r["case"] for r in missed if r["below_best_case_bound"] is True]
+    missed_above = [r["case"] for r in missed if r["below_best_case_bound"] is False]
+    missed_unseen = [r["case"] for r in missed if r["below_best_case_bound"] == "unseen"]
+    hidden_above = [r["case"] for r in hidden if r["below_best_case_bound"] is False]
     flagged_known = any(r["heldout_beyond_noise"] != "" for r in rows)
     found_flagged = sum(1 for r in found_rows if r["heldout_beyond_noise"] is True)
     # Nothing added, fitted points within the noise, held-out points beyond it (the verdict names it).
@@ -212,6 +234,15 @@ def main(out):
         f"these data) in {pct(hidden_none, len(hidden))}, \"unexplained\" in {pct(hidden_unexplained, len(hidden))}, "
         f"added a wrong effect in {pct(hidden_wrong, len(hidden))}",
     ]
+    if bound_known:
+        lines += [
+            f"* single planted effects missed: {len(missed)}; planted below the smallest departure the loop's report "
+            f"gives as detectable at best (80 % power for each gate, linear): {', '.join(missed_below) or 'none'}; "
+            f"above it: {', '.join(missed_above) or 'none'}; effect's step not visible at all: "
+            f"{', '.join(missed_unseen) or 'none'}",
+            f"* planted effects the oracle could not see (power < {VISIBLE_POWER}) although above that best-case bound "
+            f"(the bound is linear and misses absorption by the fit): {', '.join(hidden_above) or 'none'}",
+        ]
     if flagged_known:
         lines += [
             f"* nothing added, but the held-out points (fresh seeds) beyond the noise, so \"unexplained\": "

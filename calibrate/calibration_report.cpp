@@ -1,5 +1,6 @@
 #include "calibrate/calibration_report.hpp"
 
+#include "calibrate/detectability.hpp"
 #include "calibrate/effect_catalogue.hpp"
 #include "calibrate/fit.hpp"
 #include "common/json_text.hpp"
@@ -8,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <ostream>
@@ -42,6 +44,32 @@ std::string json_list(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ", ") + json_string(x);
   return "[" + s + "]";
+}
+
+// The baseline round's candidates at the loop's level, 80 % power (detectability.hpp). Empty when
+// no candidate was measured (--max-effects 0).
+std::vector<Detectability> baseline_detectability(const CalibrationResult& r) {
+  if (r.rounds.empty()) return {};
+  return detectability_at_baseline(r.rounds.front(), r.before.fitted.chi.dof, {.alpha = r.alpha, .power = 0.8});
+}
+
+void write_detectability_md(std::ostream& o, const CalibrationResult& r) {
+  const std::vector<Detectability> seen = baseline_detectability(r);
+  if (seen.empty()) return;
+  o << fmt::format(
+      "\n## The smallest effect these data could see, at best\n\nFor each effect, the smallest departure from its "
+      "neutral value at which each of the two tests the loop puts before any attribution has 80 % power: the fitted "
+      "points' chi2 at level {0} and the effect's score at level {0} / (visible candidates). Linear at the baseline "
+      "fit, the effect added on top of the fitted parameters with their directions projected out. A lower bound: a "
+      "smaller departure passes these tests less often (about half the time at 0.8 times the bound); a larger one "
+      "can still be missed, because the effect must then lower BIC, keep the held-out points and win against its "
+      "rivals, and because an effect that interacts with the fitted parameters can be absorbed by a large move of "
+      "them, which this linear view cannot see (README, Calibration, item 7: in a blind twin a rolling resistance "
+      "at twice its bound went unseen). A verdict 'consistent with noise' therefore does not exclude departures "
+      "above these sizes either.\n\n| effect | neutral | smallest detectable departure, at best |\n|---|---|---|\n",
+      r.alpha);
+  for (const Detectability& d : seen)
+    o << fmt::format("| {} | {:g} | {} |\n", d.effect, d.neutral, detectability_text(d));
 }
 
 void write_summary_json(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
@@ -86,6 +114,19 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
     o << "]}";
   }
   o << "\n  ],\n";
+  o << "  \"detectability\": [";
+  const std::vector<Detectability> seen = baseline_detectability(r);
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    const Detectability& d = seen[i];
+    const bool bounded = d.visible && !d.absorbed && std::isfinite(d.min_departure);  // else null: none detectable
+    o << fmt::format(R"({}{{"effect": {}, "neutral": {}, "lo": {}, "hi": {}, "visible": {}, "absorbed": {}, "min_departure": {}, "within_range": {}, "largest_step": {}, "largest_step_p": {}, "step_reached_range_end": {}}})",
+                     i ? ", " : "", json_string(d.effect), json_number(d.neutral), json_number(d.lo), json_number(d.hi),
+                     d.visible ? "true" : "false", d.absorbed ? "true" : "false",
+                     bounded ? json_number(d.min_departure) : "null",
+                     bounded ? (d.within_range ? "true" : "false") : "null", json_number(d.largest_step),
+                     json_number(d.largest_step_p), d.step_reached_range_end ? "true" : "false");
+  }
+  o << "],\n";
   o << fmt::format("  \"runs_simulated\": {},\n  \"runs_reused\": {},\n  \"run_seconds\": {},\n  \"wall_seconds\": {}\n}}\n",
                    r.runs_simulated, r.runs_reused, json_number(r.run_seconds), json_number(r.wall_seconds));
 }
@@ -191,6 +232,7 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                        rd.best, fmt::join(rd.rivals, ", "));
     o << fmt::format("\nDecision: {}.\n", rd.decision);
   }
+  write_detectability_md(o, r);
   o << "\n## Log\n\n```\n";
   for (const std::string& l : r.log) o << l << "\n";
   o << "```\n";

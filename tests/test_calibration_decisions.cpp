@@ -203,10 +203,12 @@ TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {
     s->prediction.valid = {true, true};
     s->whitened = {-1, 1};
   }
+  r.before.fitted.chi.dof = 10;  // the residual's degrees of freedom (the detectability bound needs some)
   Round round;
   Candidate seen, unseen;
   seen.effect = "linear_drag", seen.key = "particles.drag_per_s", seen.step = 2, seen.visible = true;
   seen.score.statistic = 9, seen.score.p = 0.003, seen.score.projected_norm = 0.25, seen.score.signature_norm = 1;
+  seen.score.se = 4;  // 1 / projected_norm
   unseen.effect = "restitution", unseen.key = "particles.restitution", unseen.step = -0.4;
   round.candidates = {seen, unseen};
   round.decision = "test";
@@ -216,10 +218,10 @@ TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {
 
   std::ifstream md(dir / "report.md");
   std::string line, header, drag_row, restitution_row;
-  while (std::getline(md, line)) {
-    if (line.rfind("| effect |", 0) == 0) header = line;
-    if (line.rfind("| linear_drag |", 0) == 0) drag_row = line;
-    if (line.rfind("| restitution |", 0) == 0) restitution_row = line;
+  while (std::getline(md, line)) {  // the first table (the rounds'); the detectability table follows it
+    if (line.rfind("| effect |", 0) == 0 && header.empty()) header = line;
+    if (line.rfind("| linear_drag |", 0) == 0 && drag_row.empty()) drag_row = line;
+    if (line.rfind("| restitution |", 0) == 0 && restitution_row.empty()) restitution_row = line;
   }
   ASSERT_FALSE(header.empty());
   const auto bars = [](const std::string& s) { return std::count(s.begin(), s.end(), '|'); };
@@ -228,11 +230,27 @@ TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {
   EXPECT_EQ(bars(restitution_row), bars(header)) << restitution_row;
   EXPECT_NE(drag_row.find("| 25 % |"), std::string::npos) << drag_row;
 
+  // The detectability table: three cells a row, one row per candidate (no '|' inside a cell).
+  std::ifstream md2(dir / "report.md");
+  bool in_table = false;
+  int rows = 0;
+  while (std::getline(md2, line)) {
+    if (line.rfind("| effect | neutral | smallest detectable departure", 0) == 0) in_table = true;
+    else if (in_table && line.rfind("|---", 0) != 0 && line.rfind("| ", 0) == 0) {
+      EXPECT_EQ(bars(line), 4) << line;
+      ++rows;
+    } else if (in_table && line.rfind("|---", 0) != 0) in_table = false;
+  }
+  EXPECT_EQ(rows, 2);
+
   const std::optional<std::string> python = find_python_with_matplotlib();
   if (!python) GTEST_SKIP() << "no python3 to parse summary.json";
   const std::string check = fmt::format(
-      "import json; c = json.load(open('{}'))['rounds'][0]['candidates']; "
-      "assert abs(c[0]['left_by_fit'] - 0.25) < 1e-12 and c[1]['left_by_fit'] is None, c",
+      "import json; c = json.load(open('{0}'))['rounds'][0]['candidates']; "
+      "assert abs(c[0]['left_by_fit'] - 0.25) < 1e-12 and c[1]['left_by_fit'] is None, c; "
+      "d = json.load(open('{0}'))['detectability']; "
+      "assert d[0]['visible'] and d[0]['min_departure'] > 4 and d[0]['within_range'] is not None, d; "
+      "assert not d[1]['visible'] and d[1]['min_departure'] is None and d[1]['within_range'] is None, d",
       (dir / "summary.json").string());
   EXPECT_EQ(run_program({*python, "-c", check}, dir / "python.log"), 0);
 }
