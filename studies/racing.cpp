@@ -131,12 +131,16 @@ RaceState replay_race(const RacingParams& p, const RaceInput& in) {
   return s;
 }
 
+int baseline_confirm_count(const RacingParams& p) { return p.baseline_confirm > 0 ? p.baseline_confirm : p.confirm; }
+
+int confirmation_end(const RacingParams& p) { return p.max + std::max(p.confirm, baseline_confirm_count(p)); }
+
 FinalEstimate final_estimate(const RacingParams& p, const RaceInput& in, int cell, std::size_t n_survivors) {
   FinalEstimate f;
   const RaceCell& c = in.cells.at(static_cast<std::size_t>(cell));
   const std::vector<double> x = replicate_slice(c.j, p.max, p.max + p.confirm);
   const std::vector<double> y =
-      replicate_slice(in.baselines.at(static_cast<std::size_t>(c.baseline)), p.max, p.max + p.confirm);
+      replicate_slice(in.baselines.at(static_cast<std::size_t>(c.baseline)), p.max, p.max + baseline_confirm_count(p));
   f.complete = !x.empty() && !y.empty();
   f.ratio = ratio_interval(x, y, p.confidence);
   if (!f.ratio.valid) return f;
@@ -157,8 +161,8 @@ RaceBudget race_budget(const RacingParams& p, const RaceState& s, std::size_t n_
     survivors += dropped < 0 ? 1 : 0;
   }
   b.race_runs += static_cast<long>(n_baselines) * screened;
-  b.race_runs += static_cast<long>(survivors + n_baselines) * p.confirm;
-  b.fixed_runs = static_cast<long>(n_cells + n_baselines) * p.confirm;
+  b.race_runs += static_cast<long>(survivors) * p.confirm + static_cast<long>(n_baselines) * baseline_confirm_count(p);
+  b.fixed_runs = static_cast<long>(n_cells) * p.confirm + static_cast<long>(n_baselines) * baseline_confirm_count(p);
   return b;
 }
 

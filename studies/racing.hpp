@@ -3,7 +3,7 @@
 // confidence bound on J/J_0 is below `drop_below` (or below the best cell's lower bound
 // minus `best_margin`) is dropped; the others get `step` more replicates, up to `max`.
 // The survivors and the baselines then get `confirm` FRESH replicates (indices max ..
-// max + confirm - 1), and the final J/J_0 and its interval use those alone: runs that
+// max + confirm - 1; a baseline `baseline_confirm` if set), and the final J/J_0 and its interval use those alone: runs that
 // decided a cell's fate never enter its final statistics, so selection cannot bias them.
 //
 // Pure statistics: no simulation, no store. The screen driver (studies/screen.hpp) feeds it
@@ -29,13 +29,21 @@ struct RacingParams {
   int initial = 3;           // screening replicates per cell in the first round
   int step = 3;              // replicates added per round
   int max = 12;              // screening replicates per cell at most
-  int confirm = 10;          // fresh replicates per survivor and per baseline (final statistics)
+  int confirm = 10;          // fresh replicates per survivor (and per baseline, unless baseline_confirm) (final statistics)
+  int baseline_confirm = 0;  // fresh replicates per baseline in the confirmation; 0: confirm. A baseline is compared
+                             // with every survivor at its gap: Dunnett's allocation gives it ~sqrt(k) x confirm for k
+                             // survivors there, and a shared baseline's noise then moves those k ratios less
   double alpha = 0.05;       // error of the drop decisions (dimensionless), per cell or per family (scope)
   bool family = false;       // scope: false = per cell (alpha / rounds), true = family-wise (alpha / (cells x rounds))
   double drop_below = 1.0;   // J/J_0: drop a cell whose upper bound is below this
   std::optional<double> best_margin;  // J/J_0: also drop when upper < best lower bound - margin (absent: off)
   double confidence = 0.95;  // two-sided level of the final intervals
 };
+
+// Fresh replicates of a baseline in the confirmation (baseline_confirm, or confirm when 0), and the
+// replicate index after the whole confirmation batch (the first index a later check may use).
+int baseline_confirm_count(const RacingParams& p);
+int confirmation_end(const RacingParams& p);
 
 // Rounds of screening (>= 1) and the replicates a cell has after round r (0-based).
 int race_rounds(const RacingParams& p);

@@ -153,7 +153,7 @@ std::vector<CellResult> cell_results(const StudyDef& study, const ScreenGrid& gr
       const auto b = runs.find({base.series, base.axes_json});
       if (c.final.complete && b != runs.end())
         c.flowing = ratio_interval(flowing_rates(cell_runs, p.max, p.max + p.confirm),
-                                   flowing_rates(b->second, p.max, p.max + p.confirm), p.confidence);
+                                   flowing_rates(b->second, p.max, p.max + baseline_confirm_count(p)), p.confidence);
     }
   }
   return out;
@@ -176,24 +176,26 @@ TextTable budget_table(const StudyDef& study, const ScreenGrid& grid, const std:
   const RaceBudget b = race_budget(p, state, grid.raced.size(), grid.baselines.size());
   double race_cpu = 0, fixed_cpu = 0;
   long stored = 0;
-  auto add = [&](int n, double wall) {
+  auto add = [&](int n, double wall, int fixed_replicates) {
     stored += n;
     race_cpu += wall;
-    if (n > 0) fixed_cpu += wall / n * p.confirm;
+    if (n > 0) fixed_cpu += wall / n * fixed_replicates;
   };
   for (const CellResult& c : cells)
-    if (c.cell->feasible) add(c.runs, c.wall_s);
+    if (c.cell->feasible) add(c.runs, c.wall_s, p.confirm);
   for (const ScreenCell& base : grid.baselines) {
     CellResult r;
     if (auto it = runs.find({base.series, base.axes_json}); it != runs.end()) add_wall(r, it->second);
-    add(r.runs, r.wall_s);
+    add(r.runs, r.wall_s, baseline_confirm_count(p));
   }
   TextTable t;
   t.title = "Budget: the race against a fixed grid at the same final confidence";
   t.header = {"", "runs", "CPU-seconds"};
   t.rows.push_back({"race (screen + confirmation), stored", fmt::format("{}", stored), fmt_num(race_cpu)});
   t.rows.push_back({"race, as planned by its decisions", fmt::format("{}", b.race_runs), ""});
-  t.rows.push_back({fmt::format("fixed grid: {} replicates per cell and baseline", p.confirm),
+  t.rows.push_back({p.baseline_confirm > 0 ? fmt::format("fixed grid: {} replicates per cell, {} per baseline", p.confirm,
+                                                          baseline_confirm_count(p))
+                                           : fmt::format("fixed grid: {} replicates per cell and baseline", p.confirm),
                     fmt::format("{}", b.fixed_runs), fmt_num(fixed_cpu)});
   t.rows.push_back({"saved (fixed - race) / fixed",
                     b.fixed_runs > 0 ? fmt::format("{:.0f} %", 100.0 * (b.fixed_runs - stored) / b.fixed_runs) : "",
@@ -495,7 +497,7 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
       state.screening_done(p) ? "" : fmt::format("**Incomplete**: {} of {} rounds decided.", state.rounds_decided,
                                                  race_rounds(p))));
   s.paragraphs.push_back(fmt::format(
-      "Final statistics: each survivor and each baseline gets {} **fresh** replicates (indices {} to {}); its J/J_0 "
+      "Final statistics: each survivor gets {} **fresh** replicates (indices {} to {}){}; its J/J_0 "
       "and {:.0f} % interval use those runs only, never the runs that decided its fate, so the selection does not "
       "bias them (no correction needed). `*`: interval above 1; `**`: above 1 also at the Bonferroni level over the "
       "survivors (a family-wise statement for the whole map). A run that did not empty (time limit, or stopped by "
@@ -503,7 +505,11 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
       "run.time_limit_s: J is the discharge rate cut at the time limit, for cells and baselines alike. The generic "
       "tables above pool screening and confirmation runs: read this "
       "section's numbers instead.",
-      p.confirm, p.max, p.max + p.confirm - 1, 100 * p.confidence));
+      p.confirm, p.max, p.max + p.confirm - 1,
+      p.baseline_confirm > 0 ? fmt::format(", each baseline {} (indices {} to {}: it is compared with every survivor at "
+                                           "its gap)", baseline_confirm_count(p), p.max, confirmation_end(p) - 1)
+                             : " and so does each baseline",
+      100 * p.confidence));
   write_decisions_csv(out_dir / "decisions.csv", in, state);
   s.tables.push_back(budget_table(study, grid, cells, state, by_point));
   s.tables.push_back(rounds_table(p, state, grid.raced.size()));

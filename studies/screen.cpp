@@ -127,7 +127,7 @@ std::vector<double> screen_j_of(const ScreenJ& j, const ScreenCell& c, std::size
 
 RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const std::vector<StoredRun>& runs) {
   const RacingParams& p = study.screen->racing;
-  const auto slots = static_cast<std::size_t>(p.max + p.confirm);
+  const auto slots = static_cast<std::size_t>(confirmation_end(p));
   const ScreenJ j = screen_j_by_replicate(study, grid, runs, grid.model, slots);
   RaceInput in;
   for (const ScreenCell& b : grid.baselines) {
@@ -146,18 +146,19 @@ std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid,
   const bool confirming = state.screening_done(p);
   const int from = confirming ? p.max : 0;
   const int to = confirming ? p.max + p.confirm : replicates_after_round(p, state.rounds_decided);
+  const int baseline_to = confirming ? p.max + baseline_confirm_count(p) : to;
   std::vector<Job> out;
-  auto add = [&](const ScreenCell& c) {
-    for (Job& job : screen_cell_jobs(study, c, grid.model, from, to)) out.push_back(std::move(job));
+  auto add = [&](const ScreenCell& c, int until) {
+    for (Job& job : screen_cell_jobs(study, c, grid.model, from, until)) out.push_back(std::move(job));
   };
   bool any_alive = false;
   for (std::size_t k = 0; k < grid.raced.size(); ++k)
     if (state.alive(static_cast<int>(k))) {
-      add(grid.cells[static_cast<std::size_t>(grid.raced[k])]);
+      add(grid.cells[static_cast<std::size_t>(grid.raced[k])], to);
       any_alive = true;
     }
   if (any_alive)
-    for (const ScreenCell& b : grid.baselines) add(b);
+    for (const ScreenCell& b : grid.baselines) add(b, baseline_to);
   return out;
 }
 
@@ -237,9 +238,9 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
   const RacingParams& p = study.screen->racing;
   const ScreenGrid grid = screen_grid(study);
   log << fmt::format("screen '{}': {} cells ({} infeasible: the obstruction does not fit), {} gaps; {} rounds of "
-                     "{} + {} replicates up to {}, then {} confirmation replicates per survivor\n",
+                     "{} + {} replicates up to {}, then {} confirmation replicates per survivor and {} per baseline\n",
                      study.name, grid.cells.size(), grid.cells.size() - grid.raced.size(), grid.baselines.size(),
-                     race_rounds(p), p.initial, p.step, p.max, p.confirm);
+                     race_rounds(p), p.initial, p.step, p.max, p.confirm, baseline_confirm_count(p));
   const ScreenStage r{study, grid, store, options, run, log};
   Tally tally(store.keys());
   int printed = 0;
@@ -252,7 +253,7 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
     const bool confirming = state.screening_done(p);
     if (confirming)
       log << fmt::format("screen confirmation: {} jobs (fresh replicates {} to {})\n", jobs.size(), p.max,
-                         p.max + p.confirm - 1);
+                         confirmation_end(p) - 1);
     const RunnerSummary step = run(jobs, store, options);
     tally.add(step, jobs);
     if (step.cancelled || !step.failed.empty()) return tally.total();

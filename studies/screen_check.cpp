@@ -16,7 +16,7 @@ const char* to_string(CheckRole r) {
 }
 
 ReplicateRange check_replicate_range(const ScreenDef& s) {
-  const int from = s.racing.max + s.racing.confirm;
+  const int from = confirmation_end(s.racing);  // after every cell's and baseline's confirmation runs
   return {from, from + s.check_replicates};
 }
 

@@ -16,7 +16,7 @@ namespace {
 
 const std::vector<std::string> kScreenKeys{
     "scenario", "shapes",     "cylinder_diameter_d", "cylinder_diameter_mm", "triangle_side_d", "triangle_side_mm",
-    "distance_d", "distance_mm", "gap_d", "gap_mm",  "reference", "initial", "step", "max", "confirm", "alpha",
+    "distance_d", "distance_mm", "gap_d", "gap_mm",  "reference", "initial", "step", "max", "confirm", "baseline_confirm", "alpha",
     "drop_below", "best_margin", "confidence", "scope", "check_model", "check_replicates", "check_controls"};
 const std::vector<std::string> kScreenShapes{"cylinder", "A", "V"};
 
@@ -92,6 +92,7 @@ void read_racing(StrictTable& t, RacingParams& r) {
   r.max = r.initial + 3 * r.step;
   if (auto v = t.integer("max", r.initial, kMaxReplicates)) r.max = static_cast<int>(*v);
   if (auto v = t.integer("confirm", 2, kMaxReplicates)) r.confirm = static_cast<int>(*v);
+  if (auto v = t.integer("baseline_confirm", 2, kMaxReplicates)) r.baseline_confirm = static_cast<int>(*v);
   if (auto v = t.number("alpha", 1e-6, 0.5)) r.alpha = *v;
   if (auto v = t.number("drop_below", 0.01, 100)) r.drop_below = *v;
   if (auto v = t.number("best_margin", 0, 100)) r.best_margin = *v;
@@ -180,7 +181,7 @@ void read_screen(const toml::table& root, const toml::table& screen, const std::
   SeriesDef none{kScreenBaseline, s.scenario, scenario_where, {{"obstruction.shape=none", scenario_where}}, {w_axis}};
   study.series.push_back(std::move(none));
   const double most = (cells + static_cast<double>(gap.values.size())) *
-                      (s.racing.max + s.racing.confirm + (s.check_model ? s.check_replicates : 0));
+                      (confirmation_end(s.racing) + (s.check_model ? s.check_replicates : 0));
   if (most > static_cast<double>(kMaxStudyJobs))
     t.missing("max", fmt::format("the screen may need {:.6g} runs ((cells + gaps) x (max + confirm + check_replicates)); at most {} "
                                  "are allowed: split it",
