@@ -98,8 +98,9 @@ struct RaceState {
 // its first n_r replicates), in order; stop at the first incomplete round.
 RaceState replay_race(const RacingParams& p, const RaceInput& in);
 
-// The final statistics of one cell: J/J_0 on the confirmation replicates only
-// (indices [max, max + confirm)), two-sided at p.confidence; invalid when they are missing.
+// The final statistics of one cell: J/J_0 on the confirmation replicates only (the cell's
+// [max, max + confirm), its baseline's [max, max + baseline_confirm_count)), two-sided at
+// p.confidence; invalid when they are missing.
 // `simultaneous_above`: the lower bound at confidence 1 - (1 - c)/n_survivors is above 1
 // (Bonferroni over the survivors: a family-wise statement for the whole map).
 struct FinalEstimate {
@@ -114,11 +115,11 @@ FinalEstimate final_estimate(const RacingParams& p, const RaceInput& in, int cel
 // Replicates [from, to) of a sample that are all present (NaN = missing); empty when any is missing.
 std::vector<double> replicate_slice(const std::vector<double>& j, int from, int to);
 
-// Runs of the race against a fixed grid that gives every cell and baseline `confirm`
-// replicates (the same final confidence per cell, with no screening).
+// Runs of the race against a fixed grid that gives every cell `confirm` replicates and every
+// baseline baseline_confirm_count (the same final confidence per cell, with no screening).
 struct RaceBudget {
   long race_runs = 0;   // screening + confirmation, cells and baselines
-  long fixed_runs = 0;  // (cells + baselines) x confirm
+  long fixed_runs = 0;  // cells x confirm + baselines x baseline_confirm_count
 };
 RaceBudget race_budget(const RacingParams& p, const RaceState& s, std::size_t n_cells, std::size_t n_baselines);
 

@@ -95,7 +95,8 @@ std::string fate_text(const CellResult& c, const RacingParams& p) {
     case HeatCell::State::final: break;
   }
   if (!c.final.complete)
-    return fmt::format("survivor: its {} confirmation runs (or its baseline's) are not all stored yet", p.confirm);
+    return fmt::format("survivor: its {} confirmation runs (or its baseline's {}) are not all stored yet", p.confirm,
+                       baseline_confirm_count(p));
   if (!c.final.ratio.valid) return "survivor: J/J_0 undefined (its baseline passed nothing in its confirmation runs)";
   const char* verdict = c.final.simultaneous_above ? "above J_0 (also simultaneously)"
                         : c.final.above            ? "above J_0"
@@ -507,7 +508,8 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
       "section's numbers instead.",
       p.confirm, p.max, p.max + p.confirm - 1,
       p.baseline_confirm > 0 ? fmt::format(", each baseline {} (indices {} to {}: it is compared with every survivor at "
-                                           "its gap)", baseline_confirm_count(p), p.max, confirmation_end(p) - 1)
+                                           "its gap)", baseline_confirm_count(p), p.max,
+                                           p.max + baseline_confirm_count(p) - 1)
                              : " and so does each baseline",
       100 * p.confidence));
   write_decisions_csv(out_dir / "decisions.csv", in, state);

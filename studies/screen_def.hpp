@@ -15,6 +15,7 @@
 //   gap_d = [3, 4, 5, 6]                    # or gap_mm: W
 //   reference = "nearest"                   # D to the nearest point (default) or "centre"
 //   initial = 3, step = 3, max = 12, confirm = 10      # replicates (studies/racing.hpp)
+//   baseline_confirm = 30                   # a baseline's confirmation replicates (default: confirm; >= confirm)
 //   alpha = 0.05, scope = "cell", drop_below = 1.0, best_margin = 0.1, confidence = 0.95
 //   check_model = "3d", check_replicates = 10, check_controls = 2   # the other model's check (screen_check.hpp)
 #pragma once

@@ -92,7 +92,8 @@ void read_racing(StrictTable& t, RacingParams& r) {
   r.max = r.initial + 3 * r.step;
   if (auto v = t.integer("max", r.initial, kMaxReplicates)) r.max = static_cast<int>(*v);
   if (auto v = t.integer("confirm", 2, kMaxReplicates)) r.confirm = static_cast<int>(*v);
-  if (auto v = t.integer("baseline_confirm", 2, kMaxReplicates)) r.baseline_confirm = static_cast<int>(*v);
+  // At least confirm: a baseline is compared with every survivor at its gap (Dunnett: more, never fewer).
+  if (auto v = t.integer("baseline_confirm", r.confirm, kMaxReplicates)) r.baseline_confirm = static_cast<int>(*v);
   if (auto v = t.number("alpha", 1e-6, 0.5)) r.alpha = *v;
   if (auto v = t.number("drop_below", 0.01, 100)) r.drop_below = *v;
   if (auto v = t.number("best_margin", 0, 100)) r.best_margin = *v;
@@ -180,10 +181,12 @@ void read_screen(const toml::table& root, const toml::table& screen, const std::
   }
   SeriesDef none{kScreenBaseline, s.scenario, scenario_where, {{"obstruction.shape=none", scenario_where}}, {w_axis}};
   study.series.push_back(std::move(none));
-  const double most = (cells + static_cast<double>(gap.values.size())) *
-                      (confirmation_end(s.racing) + (s.check_model ? s.check_replicates : 0));
+  const double check = s.check_model ? s.check_replicates : 0;
+  const double most = cells * (s.racing.max + s.racing.confirm + check) +
+                      static_cast<double>(gap.values.size()) * (confirmation_end(s.racing) + check);
   if (most > static_cast<double>(kMaxStudyJobs))
-    t.missing("max", fmt::format("the screen may need {:.6g} runs ((cells + gaps) x (max + confirm + check_replicates)); at most {} "
+    t.missing("max", fmt::format("the screen may need {:.6g} runs (cells x (max + confirm + check_replicates) + gaps x "
+                                 "(max + baseline_confirm + check_replicates)); at most {} "
                                  "are allowed: split it",
                                  most, kMaxStudyJobs));
   study.report.baseline = kScreenBaseline;
