@@ -151,17 +151,25 @@ FinalEstimate final_estimate(const RacingParams& p, const RaceInput& in, int cel
   return f;
 }
 
-RaceBudget race_budget(const RacingParams& p, const RaceState& s, std::size_t n_cells, std::size_t n_baselines) {
+bool gap_has_survivor(const RaceState& s, const RaceInput& in, int b) {
+  for (std::size_t c = 0; c < in.cells.size(); ++c)
+    if (in.cells[c].baseline == b && s.alive(static_cast<int>(c))) return true;
+  return false;
+}
+
+RaceBudget race_budget(const RacingParams& p, const RaceState& s, const RaceInput& in) {
   RaceBudget b;
   const int screened = s.screened_replicates;
+  const std::size_t n_cells = in.cells.size(), n_baselines = in.baselines.size();
   std::size_t survivors = 0;
   for (std::size_t c = 0; c < n_cells; ++c) {
     const int dropped = s.dropped_after[c];
     b.race_runs += dropped >= 0 ? replicates_after_round(p, dropped) : screened;
     survivors += dropped < 0 ? 1 : 0;
   }
-  b.race_runs += static_cast<long>(n_baselines) * screened;
-  b.race_runs += static_cast<long>(survivors) * p.confirm + static_cast<long>(n_baselines) * baseline_confirm_count(p);
+  b.race_runs += static_cast<long>(n_baselines) * screened + static_cast<long>(survivors) * p.confirm;
+  for (std::size_t g = 0; g < n_baselines; ++g)
+    b.race_runs += gap_has_survivor(s, in, static_cast<int>(g)) ? baseline_confirm_count(p) : 0;
   b.fixed_runs = static_cast<long>(n_cells) * p.confirm + static_cast<long>(n_baselines) * baseline_confirm_count(p);
   return b;
 }

@@ -121,6 +121,10 @@ struct RaceBudget {
   long race_runs = 0;   // screening + confirmation, cells and baselines
   long fixed_runs = 0;  // cells x confirm + baselines x baseline_confirm_count
 };
-RaceBudget race_budget(const RacingParams& p, const RaceState& s, std::size_t n_cells, std::size_t n_baselines);
+// A baseline gets its confirmation runs only when some cell of its gap survived (screen_next_jobs).
+RaceBudget race_budget(const RacingParams& p, const RaceState& s, const RaceInput& in);
+
+// Whether some cell at baseline `b`'s gap is alive (its baseline then needs confirmation runs).
+bool gap_has_survivor(const RaceState& s, const RaceInput& in, int b);
 
 }  // namespace gapflow

@@ -172,9 +172,9 @@ void write_decisions_csv(const fs::path& file, const RaceInput& in, const RaceSt
 }
 
 TextTable budget_table(const StudyDef& study, const ScreenGrid& grid, const std::vector<CellResult>& cells,
-                       const RaceState& state, const RunsByPoint& runs) {
+                       const RaceInput& in, const RaceState& state, const RunsByPoint& runs) {
   const RacingParams& p = study.screen->racing;
-  const RaceBudget b = race_budget(p, state, grid.raced.size(), grid.baselines.size());
+  const RaceBudget b = race_budget(p, state, in);
   double race_cpu = 0, fixed_cpu = 0;
   long stored = 0;
   auto add = [&](int n, double wall, int fixed_replicates) {
@@ -513,7 +513,7 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
                              : " and so does each baseline",
       100 * p.confidence));
   write_decisions_csv(out_dir / "decisions.csv", in, state);
-  s.tables.push_back(budget_table(study, grid, cells, state, by_point));
+  s.tables.push_back(budget_table(study, grid, cells, in, state, by_point));
   s.tables.push_back(rounds_table(p, state, grid.raced.size()));
   s.tables.push_back(cells_table(cells, p));
   if (plots) {

@@ -152,13 +152,19 @@ std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid,
     for (Job& job : screen_cell_jobs(study, c, grid.model, from, until)) out.push_back(std::move(job));
   };
   bool any_alive = false;
+  std::vector<bool> gap_alive(grid.baselines.size(), false);
   for (std::size_t k = 0; k < grid.raced.size(); ++k)
     if (state.alive(static_cast<int>(k))) {
-      add(grid.cells[static_cast<std::size_t>(grid.raced[k])], to);
+      const ScreenCell& cell = grid.cells[static_cast<std::size_t>(grid.raced[k])];
+      add(cell, to);
       any_alive = true;
+      gap_alive.at(static_cast<std::size_t>(cell.gap)) = true;
     }
+  // Screening: every baseline. Confirmation: only the baselines of gaps with a survivor (the
+  // others are compared with nothing; race_budget counts the same).
   if (any_alive)
-    for (const ScreenCell& b : grid.baselines) add(b, baseline_to);
+    for (std::size_t b = 0; b < grid.baselines.size(); ++b)
+      if (!confirming || gap_alive[b]) add(grid.baselines[b], baseline_to);
   return out;
 }
 

@@ -102,7 +102,7 @@ SyntheticOutcome race_synthetic(const std::vector<double>& truth, const RacingPa
     o.family_error += dropped_good ? 1 : 0;
     o.best_kept += s.alive(best) ? 1 : 0;
     o.worst_dropped += s.alive(worst) ? 0 : 1;
-    const RaceBudget b = race_budget(p, s, truth.size(), 1);
+    const RaceBudget b = race_budget(p, s, in);
     o.race_runs += static_cast<double>(b.race_runs);
     o.fixed_runs += static_cast<double>(b.fixed_runs);
   }
@@ -225,7 +225,7 @@ TEST(Racing, ALargerBaselineConfirmationShrinksTheSharedShiftAndStillCovers) {
   EXPECT_NEAR(b.coverage, 0.95, 0.015);
   // The budget counts the baseline's runs, in the race and in the fixed grid alike.
   const RaceState s = replay_race(dunnett, synthetic_input(kMixed, dunnett, 1));
-  const RaceBudget budget = race_budget(dunnett, s, kMixed.size(), 1);
+  const RaceBudget budget = race_budget(dunnett, s, synthetic_input(kMixed, dunnett, 1));
   EXPECT_EQ(budget.fixed_runs, static_cast<long>(kMixed.size()) * dunnett.confirm + dunnett.baseline_confirm);
   long screened = 0, survivors = 0;
   for (std::size_t c = 0; c < kMixed.size(); ++c) {
@@ -548,6 +548,49 @@ TEST(ScreenStudy, TheConfirmationGivesBaselinesTheirOwnReplicateCount) {
   const std::size_t cell_jobs = grid.raced.size() * 3, baseline_jobs = grid.baselines.size() * 7;
   EXPECT_EQ(jobs.size(), cell_jobs + baseline_jobs);
   EXPECT_EQ(check_replicate_range(*study.screen).from, p.max + 7);
+}
+
+// A baseline is confirmed only where some cell of its gap survived: the others are compared with
+// nothing. The race's budget counts the same runs the driver asks for.
+TEST(ScreenStudy, AGapWithoutSurvivorsGetsNoBaselineConfirmation) {
+  TempDir dir("twogaps");
+  std::string text;
+  {
+    std::ifstream in(source_path("studies/examples/tiny_screen.toml"));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+  }
+  const std::string scenario = "\"../../scenarios/paper/cylinder.toml\"";
+  text.replace(text.find(scenario), scenario.size(), "\"" + source_path("scenarios/paper/cylinder.toml").string() + "\"");
+  text.replace(text.find("gap_d = [4]"), 11, "gap_d = [4, 5]");
+  std::ofstream(dir / "two.toml") << text;
+  const StudyDef study = load_study(dir / "two.toml");
+  const RacingParams& p = study.screen->racing;  // max 4, confirm 3
+  const ScreenGrid grid = screen_grid(study);
+  ASSERT_EQ(grid.baselines.size(), 2u);
+  RaceInput in = screen_race_input(study, grid, {});
+  for (auto& base : in.baselines)
+    for (int r = 0; r < p.max; ++r) base[static_cast<std::size_t>(r)] = 100 + r;
+  std::size_t kept = 0;
+  for (RaceCell& c : in.cells) {
+    const double level = c.baseline == 0 ? 101 : 20;  // gap 0: every cell near J_0; gap 1: far below
+    for (int r = 0; r < p.max; ++r) c.j[static_cast<std::size_t>(r)] = level + r;
+    kept += c.baseline == 0 ? 1 : 0;
+  }
+  const RaceState state = replay_race(p, in);
+  ASSERT_TRUE(state.screening_done(p));
+  EXPECT_TRUE(gap_has_survivor(state, in, 0));
+  EXPECT_FALSE(gap_has_survivor(state, in, 1));
+  const std::vector<Job> jobs = screen_next_jobs(study, grid, state);
+  EXPECT_EQ(jobs.size(), kept * 3 + 1 * 3);  // the survivors and one baseline, confirm 3 each
+  const RaceBudget budget = race_budget(p, state, in);
+  long screening = 0;
+  for (std::size_t c = 0; c < in.cells.size(); ++c) {
+    const int dropped = state.dropped_after[c];
+    screening += dropped >= 0 ? replicates_after_round(p, dropped) : p.max;
+  }
+  EXPECT_EQ(budget.race_runs, screening + 2 * p.max + static_cast<long>(jobs.size()));
 }
 
 TEST(ScreenStudy, RaceFindsACellsRunsByAxisValuesNotByIndex) {
