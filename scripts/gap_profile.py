@@ -42,9 +42,19 @@ def main():
     ap.add_argument("--bands", type=int, default=5)
     ap.add_argument("--point", action="append", required=True, help="LABEL=SERIES:TEXT")
     a = ap.parse_args()
-    db = sqlite3.connect(f"file:{a.store}?mode=ro", uri=True)
-    if db.execute("select count(*) from crossings").fetchone()[0] == 0:
-        sys.exit(f"error: {a.store} has no crossing rows (a slim store?): use the working store")
+    try:
+        db = sqlite3.connect(f"file:{a.store}?mode=ro", uri=True)
+        has_crossings = db.execute("select exists(select 1 from crossings)").fetchone()[0]
+    except sqlite3.Error as e:
+        print(f"error: {a.store}: not a study store ({e})", file=sys.stderr)
+        sys.exit(2)
+    if not has_crossings:
+        print(f"error: {a.store} has no crossing rows (a slim store?): use the working store", file=sys.stderr)
+        sys.exit(2)
+    for spec in a.point:
+        if "=" not in spec or ":" not in spec.split("=", 1)[1]:
+            print(f"error: --point {spec!r}: expected LABEL=SERIES:TEXT", file=sys.stderr)
+            sys.exit(2)
     print(f"steady outflow by band of the gap, spheres/s (x/W from -0.5 to 0.5 in {a.bands} bands), "
           f"model {a.model}, W/d {a.w_over_d:g}, replicates {a.replicates[0]}-{a.replicates[1]}, mean over runs ± se")
     print("| point | runs | " + " | ".join(f"band {i + 1}" for i in range(a.bands)) + " | total |")
