@@ -213,7 +213,7 @@ def main(out):
         "# Calibration loop: blind study",
         "",
         "Made by `studies/calibration_blind.sh` (twins of `data/blind/design.toml`, each calibrated blind with the 2D model; "
-        "this page by `/usr/bin/python3 calibrate/blind_summary.py results/calibration-blind`). Truth per twin in `truth/`, "
+        f"this page by `/usr/bin/python3 calibrate/blind_summary.py {out}`). Truth per twin in `truth/`, "
         "each calibration's report data in `<case>/`, one row per twin in `cases.csv`.",
         "",
         f"* twins finished: {len(rows)}",
