@@ -4,8 +4,9 @@
 Reads a study store that still has its crossing rows (the working store of a screen, not the
 slim copy: scripts/slim_store.py drops them). For each point named, over the runs of one model
 and replicate range: the crossings of the middle half of each run (the steady discharge, the
-first and last quarters of its crossings left out), counted by where they crossed the gap line,
-x/W in [-0.5, 0.5], in `bands` equal bands, and divided by the time that middle half took.
+first and last quarters of its crossings left out), counted by where the sphere's centre crossed
+the gap line, in `bands` equal bands of the range a centre can reach, |x| <= (W - d)/2 (a
+centre stays d/2 from the tips), and divided by the time that middle half took.
 Spheres per second per band: mean over runs ± its standard error (runs are independent replicates).
 
   scripts/gap_profile.py STORE --model 2d --w-over-d 6 --replicates 12 21 \\
@@ -18,7 +19,7 @@ import sqlite3
 import sys
 
 
-def steady_band_flux(db, job_key, gap_m, bands):
+def steady_band_flux(db, job_key, reach_m, bands):
     rows = db.execute("select x_m, t_s from crossings where job_key = ? order by t_s", (job_key,)).fetchall()
     if len(rows) < 8:
         return None
@@ -28,7 +29,7 @@ def steady_band_flux(db, job_key, gap_m, bands):
         return None
     counts = [0] * bands
     for x, _ in rows[lo:hi]:
-        b = int((x / gap_m + 0.5) * bands)
+        b = int((x / reach_m + 0.5) * bands)
         counts[min(bands - 1, max(0, b))] += 1
     return [c / duration for c in counts]
 
@@ -42,6 +43,9 @@ def main():
     ap.add_argument("--bands", type=int, default=5)
     ap.add_argument("--point", action="append", required=True, help="LABEL=SERIES:TEXT")
     a = ap.parse_args()
+    if a.bands < 1:
+        print("error: --bands must be >= 1", file=sys.stderr)
+        sys.exit(2)
     try:
         db = sqlite3.connect(f"file:{a.store}?mode=ro", uri=True)
         has_crossings = db.execute("select exists(select 1 from crossings)").fetchone()[0]
@@ -55,7 +59,8 @@ def main():
         if "=" not in spec or ":" not in spec.split("=", 1)[1]:
             print(f"error: --point {spec!r}: expected LABEL=SERIES:TEXT", file=sys.stderr)
             sys.exit(2)
-    print(f"steady outflow by band of the gap, spheres/s (x/W from -0.5 to 0.5 in {a.bands} bands), "
+    print(f"steady outflow by band of the gap, spheres/s ({a.bands} equal bands of the reach of a sphere's centre, "
+          f"|x| <= (W - d)/2), "
           f"model {a.model}, W/d {a.w_over_d:g}, replicates {a.replicates[0]}-{a.replicates[1]}, mean over runs ± se")
     print("| point | runs | " + " | ".join(f"band {i + 1}" for i in range(a.bands)) + " | total |")
     print("|---|---|" + "---|" * (a.bands + 1))
@@ -63,10 +68,15 @@ def main():
         label, rest = spec.split("=", 1)
         series, text = rest.split(":", 1)
         runs = db.execute(
-            "select job_key, gap_m from runs where model = ? and series = ? and abs(w_over_d - ?) < 0.01 "
+            "select job_key, gap_m - diameter_m from runs where model = ? and series = ? and abs(w_over_d - ?) < 0.01 "
             "and replicate between ? and ? and instr(point_label, ?) > 0",
             (a.model, series, a.w_over_d, a.replicates[0], a.replicates[1], text)).fetchall()
+        if not runs:
+            print(f"error: --point {spec!r} matches no run of model {a.model} at W/d {a.w_over_d:g}", file=sys.stderr)
+            sys.exit(2)
         fluxes = [f for f in (steady_band_flux(db, k, g, a.bands) for k, g in runs) if f is not None]
+        if len(fluxes) < len(runs):
+            print(f"note: {label}: {len(runs) - len(fluxes)} run(s) with fewer than 8 crossings left out", file=sys.stderr)
         if not fluxes:
             print(f"| {label} | 0 | " + " | ".join("" for _ in range(a.bands)) + " | |")
             continue

@@ -16,7 +16,7 @@ none="none=none:"
 a4="A 4 d, D 7 d=A:side_mm=31.0, obstruction.distance_mm=54.25"
 c4="cylinder 4 d, D 7 d=cylinder:diameter_mm=31.0, obstruction.distance_mm=54.25"
 echo "# Steady outflow across the gap (made by scripts/waiting_room_gap_profile.sh)"
-for args in "2d 6 12 21" "3d 6 22 31" "2d 4.26 12 21" "2d 3 12 21" "3d 3 22 31"; do
+for args in "2d 6 12 21" "3d 6 22 31" "2d 4.26 12 21" "2d 3 12 21"; do
   read -r model w first last <<< "$args"
   echo
   /usr/bin/python3 scripts/gap_profile.py "$store" --model "$model" --w-over-d "$w" --replicates "$first" "$last" \

@@ -2,7 +2,7 @@
 // baseline: every cell gets `initial` replicates; after each round, a cell whose upper
 // confidence bound on J/J_0 is below `drop_below` (or below the best cell's lower bound
 // minus `best_margin`) is dropped; the others get `step` more replicates, up to `max`.
-// The survivors and the baselines then get `confirm` FRESH replicates (indices max ..
+// The survivors and the baselines of their gaps then get `confirm` FRESH replicates (indices max ..
 // max + confirm - 1; a baseline `baseline_confirm` if set), and the final J/J_0 and its interval use those alone: runs that
 // decided a cell's fate never enter its final statistics, so selection cannot bias them.
 //

@@ -507,10 +507,10 @@ ExperimentSection screen_section(const StudyDef& study, const std::vector<Stored
       "tables above pool screening and confirmation runs: read this "
       "section's numbers instead.",
       p.confirm, p.max, p.max + p.confirm - 1,
-      p.baseline_confirm > 0 ? fmt::format(", each baseline {} (indices {} to {}: it is compared with every survivor at "
-                                           "its gap)", baseline_confirm_count(p), p.max,
+      p.baseline_confirm > 0 ? fmt::format(", the baseline of each gap with a survivor {} (indices {} to {}: it is "
+                                           "compared with every survivor at its gap)", baseline_confirm_count(p), p.max,
                                            p.max + baseline_confirm_count(p) - 1)
-                             : " and so does each baseline",
+                             : " and so does the baseline of each gap with a survivor",
       100 * p.confidence));
   write_decisions_csv(out_dir / "decisions.csv", in, state);
   s.tables.push_back(budget_table(study, grid, cells, in, state, by_point));

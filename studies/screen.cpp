@@ -244,7 +244,8 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
   const RacingParams& p = study.screen->racing;
   const ScreenGrid grid = screen_grid(study);
   log << fmt::format("screen '{}': {} cells ({} infeasible: the obstruction does not fit), {} gaps; {} rounds of "
-                     "{} + {} replicates up to {}, then {} confirmation replicates per survivor and {} per baseline\n",
+                     "{} + {} replicates up to {}, then {} confirmation replicates per survivor and {} per baseline of a gap with a "
+                     "survivor\n",
                      study.name, grid.cells.size(), grid.cells.size() - grid.raced.size(), grid.baselines.size(),
                      race_rounds(p), p.initial, p.step, p.max, p.confirm, baseline_confirm_count(p));
   const ScreenStage r{study, grid, store, options, run, log};

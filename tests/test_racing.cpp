@@ -584,6 +584,10 @@ TEST(ScreenStudy, AGapWithoutSurvivorsGetsNoBaselineConfirmation) {
   EXPECT_FALSE(gap_has_survivor(state, in, 1));
   const std::vector<Job> jobs = screen_next_jobs(study, grid, state);
   EXPECT_EQ(jobs.size(), kept * 3 + 1 * 3);  // the survivors and one baseline, confirm 3 each
+  std::size_t of_gap0 = 0;  // and that baseline is gap 0's
+  for (const Job& want : screen_cell_jobs(study, grid.baselines[0], grid.model, p.max, p.max + 3))
+    of_gap0 += std::count_if(jobs.begin(), jobs.end(), [&](const Job& j) { return j.id.key == want.id.key; });
+  EXPECT_EQ(of_gap0, 3u);
   const RaceBudget budget = race_budget(p, state, in);
   long screening = 0;
   for (std::size_t c = 0; c < in.cells.size(); ++c) {
