@@ -128,15 +128,11 @@ int screen_dry_run_or_refuse(const StudyCommands::Options& o, const StudyDef& st
   const ScreenGrid g = screen_grid(study);
   const RacingParams& p = study.screen->racing;
   const std::size_t raced = g.raced.size(), gaps = g.baselines.size();
-  const auto cell_confirm = static_cast<std::size_t>(p.confirm);
-  const auto base_confirm = static_cast<std::size_t>(baseline_confirm_count(p));
-  const auto screening = static_cast<std::size_t>(p.max);
   std::cout << fmt::format("screen '{}': {} cells, {} feasible, {} gaps; {} rounds ({} to {} replicates), {} "
                            "confirmation replicates per survivor and {} per baseline\nat most {} runs (no cell "
                            "dropped); a fixed grid at the final confidence: {} runs\n",
                            study.name, g.cells.size(), raced, gaps, race_rounds(p), p.initial, p.max, p.confirm,
-                           base_confirm, raced * (screening + cell_confirm) + gaps * (screening + base_confirm),
-                           raced * cell_confirm + gaps * base_confirm);
+                           baseline_confirm_count(p), most_race_runs(p, raced, gaps), fixed_grid_runs(p, raced, gaps));
   if (const ScreenDef& s = *study.screen; s.check_model)
     std::cout << fmt::format("then a check in {}: {} fresh replicates per cell above J_0, per control ({}) and per "
                              "baseline of their gaps (the number of cells above J_0 is known only at the end)\n",

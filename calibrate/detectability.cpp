@@ -49,7 +49,6 @@ bool near(double a, double b, double scale) { return std::abs(a - b) <= 1e-9 * s
 Detectability entry_of(const Candidate& c, double lambda_star) {
   Detectability d;
   d.effect = c.effect;
-  d.key = c.key;
   d.neutral = c.neutral;
   if (const EffectDef* e = find_effect(c.effect)) {
     d.unit = e->unit;

@@ -41,7 +41,7 @@ double chi_square_test_power(double lambda, double dof, double alpha);
 double min_detectable_noncentrality(double dof, double alpha, double score_alpha, double power);
 
 struct Detectability {
-  std::string effect, key, unit;
+  std::string effect, unit;
   double neutral = 0;          // the template's value (key units)
   double lo = 0, hi = 0;       // the catalogue's plausible range (key units)
   bool visible = false;        // its step moved the model beyond its noise at the baseline fit

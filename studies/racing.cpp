@@ -170,8 +170,16 @@ RaceBudget race_budget(const RacingParams& p, const RaceState& s, const RaceInpu
   b.race_runs += static_cast<long>(n_baselines) * screened + static_cast<long>(survivors) * p.confirm;
   for (std::size_t g = 0; g < n_baselines; ++g)
     b.race_runs += gap_has_survivor(s, in, static_cast<int>(g)) ? baseline_confirm_count(p) : 0;
-  b.fixed_runs = static_cast<long>(n_cells) * p.confirm + static_cast<long>(n_baselines) * baseline_confirm_count(p);
+  b.fixed_runs = fixed_grid_runs(p, n_cells, n_baselines);
   return b;
+}
+
+long fixed_grid_runs(const RacingParams& p, std::size_t n_cells, std::size_t n_baselines) {
+  return static_cast<long>(n_cells) * p.confirm + static_cast<long>(n_baselines) * baseline_confirm_count(p);
+}
+
+long most_race_runs(const RacingParams& p, std::size_t n_cells, std::size_t n_baselines) {
+  return static_cast<long>(n_cells + n_baselines) * p.max + fixed_grid_runs(p, n_cells, n_baselines);
 }
 
 }  // namespace gapflow

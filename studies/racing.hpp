@@ -124,6 +124,11 @@ struct RaceBudget {
 // A baseline gets its confirmation runs only when some cell of its gap survived (screen_next_jobs).
 RaceBudget race_budget(const RacingParams& p, const RaceState& s, const RaceInput& in);
 
+// Runs of the fixed grid (cells x confirm + baselines x baseline_confirm_count), and the most a
+// race can take (no cell dropped: every cell and baseline screened to max, then confirmed).
+long fixed_grid_runs(const RacingParams& p, std::size_t n_cells, std::size_t n_baselines);
+long most_race_runs(const RacingParams& p, std::size_t n_cells, std::size_t n_baselines);
+
 // Whether some cell at baseline `b`'s gap is alive (its baseline then needs confirmation runs).
 bool gap_has_survivor(const RaceState& s, const RaceInput& in, int b);
 

@@ -141,7 +141,8 @@ RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const
   return in;
 }
 
-std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid, const RaceState& state) {
+std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid, const RaceInput& in,
+                                  const RaceState& state) {
   const RacingParams& p = study.screen->racing;
   const bool confirming = state.screening_done(p);
   const int from = confirming ? p.max : 0;
@@ -152,19 +153,16 @@ std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid,
     for (Job& job : screen_cell_jobs(study, c, grid.model, from, until)) out.push_back(std::move(job));
   };
   bool any_alive = false;
-  std::vector<bool> gap_alive(grid.baselines.size(), false);
   for (std::size_t k = 0; k < grid.raced.size(); ++k)
     if (state.alive(static_cast<int>(k))) {
-      const ScreenCell& cell = grid.cells[static_cast<std::size_t>(grid.raced[k])];
-      add(cell, to);
+      add(grid.cells[static_cast<std::size_t>(grid.raced[k])], to);
       any_alive = true;
-      gap_alive.at(static_cast<std::size_t>(cell.gap)) = true;
     }
   // Screening: every baseline. Confirmation: only the baselines of gaps with a survivor (the
   // others are compared with nothing; race_budget counts the same).
   if (any_alive)
     for (std::size_t b = 0; b < grid.baselines.size(); ++b)
-      if (!confirming || gap_alive[b]) add(grid.baselines[b], baseline_to);
+      if (!confirming || gap_has_survivor(state, in, static_cast<int>(b))) add(grid.baselines[b], baseline_to);
   return out;
 }
 
@@ -254,9 +252,10 @@ RunnerSummary run_screen(const StudyDef& study, Store& store, const RunnerOption
   for (int stage = 0; stage <= race_rounds(p) + 1; ++stage) {
     const std::vector<StoredRun> stored = store.load(study.name);
     if (stage == 0) log_stale_runs(log, current_screen_runs(study, grid, stored, grid.model).ignored);
-    const RaceState state = replay_race(p, screen_race_input(study, grid, stored));
+    const RaceInput in = screen_race_input(study, grid, stored);
+    const RaceState state = replay_race(p, in);
     for (; printed < state.rounds_decided; ++printed) print_round(log, p, state, printed, grid.raced.size());
-    const std::vector<Job> jobs = screen_next_jobs(study, grid, state);
+    const std::vector<Job> jobs = screen_next_jobs(study, grid, in, state);
     const bool confirming = state.screening_done(p);
     if (confirming)
       log << fmt::format("screen confirmation: {} jobs (fresh replicates {} to {})\n", jobs.size(), p.max,

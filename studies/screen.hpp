@@ -83,7 +83,8 @@ RaceInput screen_race_input(const StudyDef& study, const ScreenGrid& grid, const
 
 // The jobs the race needs next: the missing replicates of the next round (alive cells and
 // every baseline), or after the last round the confirmation batch; empty when done.
-std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid, const RaceState& state);
+std::vector<Job> screen_next_jobs(const StudyDef& study, const ScreenGrid& grid, const RaceInput& in,
+                                  const RaceState& state);
 
 // Run the screen to its end (or until a job fails or the run is cancelled), printing each
 // round's decisions to `log`.

@@ -182,8 +182,8 @@ void read_screen(const toml::table& root, const toml::table& screen, const std::
   SeriesDef none{kScreenBaseline, s.scenario, scenario_where, {{"obstruction.shape=none", scenario_where}}, {w_axis}};
   study.series.push_back(std::move(none));
   const double check = s.check_model ? s.check_replicates : 0;
-  const double most = cells * (s.racing.max + s.racing.confirm + check) +
-                      static_cast<double>(gap.values.size()) * (confirmation_end(s.racing) + check);
+  const double most = static_cast<double>(most_race_runs(s.racing, static_cast<std::size_t>(cells), gap.values.size())) +
+                      (cells + static_cast<double>(gap.values.size())) * check;
   if (most > static_cast<double>(kMaxStudyJobs))
     t.missing("max", fmt::format("the screen may need {:.6g} runs (cells x (max + confirm + check_replicates) + gaps x "
                                  "(max + baseline_confirm + check_replicates)); at most {} "

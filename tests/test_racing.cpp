@@ -544,7 +544,7 @@ TEST(ScreenStudy, TheConfirmationGivesBaselinesTheirOwnReplicateCount) {
     for (int r = 0; r < p.max; ++r) c.j[static_cast<std::size_t>(r)] = 101 + r;  // every cell survives
   const RaceState state = replay_race(p, in);
   ASSERT_TRUE(state.screening_done(p));
-  const std::vector<Job> jobs = screen_next_jobs(study, grid, state);
+  const std::vector<Job> jobs = screen_next_jobs(study, grid, in, state);
   const std::size_t cell_jobs = grid.raced.size() * 3, baseline_jobs = grid.baselines.size() * 7;
   EXPECT_EQ(jobs.size(), cell_jobs + baseline_jobs);
   EXPECT_EQ(check_replicate_range(*study.screen).from, p.max + 7);
@@ -582,7 +582,7 @@ TEST(ScreenStudy, AGapWithoutSurvivorsGetsNoBaselineConfirmation) {
   ASSERT_TRUE(state.screening_done(p));
   EXPECT_TRUE(gap_has_survivor(state, in, 0));
   EXPECT_FALSE(gap_has_survivor(state, in, 1));
-  const std::vector<Job> jobs = screen_next_jobs(study, grid, state);
+  const std::vector<Job> jobs = screen_next_jobs(study, grid, in, state);
   EXPECT_EQ(jobs.size(), kept * 3 + 1 * 3);  // the survivors and one baseline, confirm 3 each
   std::size_t of_gap0 = 0;  // and that baseline is gap 0's
   for (const Job& want : screen_cell_jobs(study, grid.baselines[0], grid.model, p.max, p.max + 3))
