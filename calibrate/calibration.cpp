@@ -91,7 +91,10 @@ std::vector<double> whitened_residual(const DataFile& data, const Prediction& p)
   return w;
 }
 
-ErrorMeasures measure(const DataFile& data, const Prediction& p, bool held_out, int fitted_parameters) {
+// `params` are the parameters behind `p`: on the fitted points the free parameters' measurements
+// join the chi^2 (one degree of freedom each), not the RMSE or the RMS (those are the points').
+ErrorMeasures measure(const DataFile& data, const Prediction& p, const ParameterSet& params, bool held_out,
+                      int fitted_parameters) {
   ErrorMeasures m;
   const std::vector<double> w = whitened_residual(data, p);
   std::vector<double> picked;
@@ -111,8 +114,15 @@ ErrorMeasures measure(const DataFile& data, const Prediction& p, bool held_out, 
   const int valid = m.n - m.invalid;
   m.rmse = valid > 0 ? std::sqrt(sq / valid) : kNaN;
   const Eigen::VectorXd v = Eigen::Map<const Eigen::VectorXd>(picked.data(), m.n);
-  m.chi = chi_square_of(v, held_out ? 0 : fitted_parameters);
-  m.rms_whitened = std::sqrt(m.chi.chi2 / m.n);
+  m.rms_whitened = std::sqrt(v.squaredNorm() / m.n);
+  if (held_out) {
+    m.chi = chi_square_of(v, 0);
+    return m;
+  }
+  const Eigen::VectorXd meas = measurement_rows(data, params, {}).residual;
+  Eigen::VectorXd all(v.size() + meas.size());
+  all << v, meas;
+  m.chi = chi_square_of(all, fitted_parameters);
   return m;
 }
 
@@ -121,9 +131,10 @@ ModelState make_state(const DataFile& data, const ParameterSet& params, const Pr
   s.params = params;
   s.prediction = p;
   s.whitened = whitened_residual(data, p);
-  s.fitted = measure(data, p, false, fitted_parameters);
-  s.held_out = measure(data, p, true, fitted_parameters);
-  s.bic = bic(deviance_of(data, p), fitted_parameters, s.fitted.n);  // the fits' objective, not chi^2 (fit.hpp)
+  s.fitted = measure(data, p, params, false, fitted_parameters);
+  s.held_out = measure(data, p, params, true, fitted_parameters);
+  // The fits' objective, not chi^2 (fit.hpp); the measurements are data of the fit.
+  s.bic = bic(deviance_of(data, p, params), fitted_parameters, s.fitted.n + measured_count(data));
   return s;
 }
 
@@ -180,7 +191,13 @@ ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const
     }
   }
   for (std::size_t b = 0; b < held.size(); ++b) r(static_cast<Eigen::Index>(b)) = w[held[b]];
-  return held_out_chi_square(r, G, X);
+  // The measurements are fitted data: they narrow the fitted parameters' uncertainty.
+  std::vector<std::string> names;
+  for (const Key& key : keys) names.push_back(key.key);
+  const MeasurementRows meas = measurement_rows(data, after.params, names);
+  Eigen::MatrixXd Xm(X.rows() + meas.sensitivity.rows(), k);
+  Xm << X, meas.sensitivity;
+  return held_out_chi_square(r, G, Xm);
 }
 
 }  // namespace
@@ -207,18 +224,27 @@ class Loop {
     std::vector<double> r;
     for (std::size_t i = 0; i < data_.points.size(); ++i)
       if (!data_.points[i].held_out) r.push_back(state.whitened[i]);
-    const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
+    // The free parameters' measurements are rows of their own below the points: a measured
+    // parameter cannot move freely to mimic an effect, so less of a signature is projected out.
+    std::vector<std::string> columns = surface.keys;
+    for (const EffectTerm& t : surface.effects) columns.push_back(t.key);
+    const MeasurementRows meas = measurement_rows(data_, state.params, columns);
+    const auto n_points = static_cast<Eigen::Index>(r.size()), n_rows = n_points + meas.residual.size();
+    Eigen::VectorXd rv(n_rows);
+    rv << Eigen::Map<const Eigen::VectorXd>(r.data(), n_points), meas.residual;
     // X: what the fit already moves: the free parameters and the effects added.
-    Eigen::MatrixXd X(rv.size(), static_cast<Eigen::Index>(surface.keys.size() + surface.effects.size()));
+    Eigen::MatrixXd X(n_rows, static_cast<Eigen::Index>(columns.size()));
+    X.bottomRows(meas.residual.size()) = meas.sensitivity;
     Eigen::Index col = 0;
     for (std::size_t k = 0; k < surface.keys.size(); ++k)
-      X.col(col++) = fitted_whitened(data_, at, surface.derivative(state.params, k));
-    for (const EffectTerm& t : surface.effects) X.col(col++) = fitted_whitened(data_, at, t.slope);
+      X.col(col++).head(n_points) = fitted_whitened(data_, at, surface.derivative(state.params, k));
+    for (const EffectTerm& t : surface.effects) X.col(col++).head(n_points) = fitted_whitened(data_, at, t.slope);
     std::vector<Eigen::VectorXd> visible_u;
     std::vector<std::size_t> visible_index;
     for (std::size_t c = 0; c < cands.size(); ++c) {
       if (!cands[c].visible) continue;
-      const Eigen::VectorXd u = fitted_whitened(data_, at, cands[c].signature);
+      Eigen::VectorXd u = Eigen::VectorXd::Zero(n_rows);  // an effect does not move a measurement
+      u.head(n_points) = fitted_whitened(data_, at, cands[c].signature);
       cands[c].score = score_signature(rv, X, u);
       visible_u.push_back(u);
       visible_index.push_back(c);
@@ -497,11 +523,11 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   // Fresh seeds: the fitted parameters before and after, simulated directly on other runs.
   const std::vector<Prediction> fresh =
       ev.evaluate({out.before.params, out.after.params}, data.seed + def.fresh_seed_offset, data.model_replicates);
-  out.before.fitted_fresh = measure(data, fresh[0], false, n_free);
-  out.before.held_out_fresh = measure(data, fresh[0], true, n_free);
+  out.before.fitted_fresh = measure(data, fresh[0], out.before.params, false, n_free);
+  out.before.held_out_fresh = measure(data, fresh[0], out.before.params, true, n_free);
   const int k_final = n_free + static_cast<int>(out.effects.size());
-  out.after.fitted_fresh = measure(data, fresh[1], false, k_final);
-  out.after.held_out_fresh = measure(data, fresh[1], true, k_final);
+  out.after.fitted_fresh = measure(data, fresh[1], out.after.params, false, k_final);
+  out.after.held_out_fresh = measure(data, fresh[1], out.after.params, true, k_final);
   out.before.simulated_fresh = fresh[0];
   out.after.simulated_fresh = fresh[1];
 

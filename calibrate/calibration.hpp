@@ -4,7 +4,9 @@
 //
 //   1. baseline fit of the free parameters (weighted least squares on the fit
 //      scale, common random numbers): a grid with a quadratic refinement for one
-//      parameter, NLopt's BOBYQA for two or three;
+//      parameter, NLopt's BOBYQA for two or three; a free parameter the data file
+//      says was measured independently (FreeParameter::measured) is one more datum
+//      of every fit, chi^2 and score test;
 //   2. error before: RMSE, RMS of the whitened residual, chi^2/nu and p, fitted and
 //      held-out points apart; the fitted point re-scored on fresh seeds;
 //   3. signatures: every applicable catalogue effect moved by its physical step

@@ -79,6 +79,12 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
   o << fmt::format("  \"data\": {},\n  \"data_file\": {},\n  \"model\": {},\n  \"observable\": {},\n  \"observables\": {},\n",
                    json_string(r.data_name), json_string(data.file.string()), json_string(r.model),
                    json_string(to_string(data.observable)), json_string(data.observables_text()));
+  std::string measured;
+  for (const FreeParameter& f : data.free)
+    if (f.has_measurement())
+      measured += fmt::format("{}{{\"key\": {}, \"measured\": {}, \"se\": {}}}", measured.empty() ? "" : ", ",
+                              json_string(f.key), json_number(f.measured), json_number(f.measured_se));
+  o << "  \"measured_free\": [" << measured << "],\n";
   o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n  \"held_out_beyond_noise\": {},\n", json_string(r.verdict),
                    r.poor_fit ? "true" : "false", r.held_out_beyond_noise ? "true" : "false");
   o << fmt::format("  \"held_out_fresh_fit_aware\": {{\"chi2\": {}, \"dof\": {}, \"p\": {}}},\n",
@@ -200,7 +206,14 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                      "parameters' uncertainty included){}.",
                      r.held_out_fresh_fit_aware.p, reading);
   }
-  o << "\n\n## Error before and after\n\nRMSE on the fit scale (log scale: about a relative error); RMS of the whitened residual (1 = at the noise floor); chi2/nu with its p-value (fitted points: nu = n - fitted parameters; held-out points: nu = n).\n\n";
+  std::string measured;
+  for (const FreeParameter& f : data.free)
+    if (f.has_measurement()) measured += fmt::format("{}`{}` = {:.4g} +- {:.4g}", measured.empty() ? "" : ", ", f.key, f.measured, f.measured_se);
+  o << "\n\n## Error before and after\n\nRMSE on the fit scale (log scale: about a relative error); RMS of the whitened residual (1 = at the noise floor); chi2/nu with its p-value (fitted points: nu = n - fitted parameters; held-out points: nu = n).";
+  if (!measured.empty())
+    o << " The data file gives independent measurements of free parameters (" << measured
+      << "): each is one more fitted datum, in every fit and in the fitted points' chi2 and nu (not in n, RMSE or RMS).";
+  o << "\n\n";
   o << "| points | n | RMSE | RMS/noise | chi2 / nu | p |\n|---|---|---|---|---|---|\n";
   o << errors_row("before, fitted", r.before.fitted) << errors_row("before, held out", r.before.held_out);
   o << errors_row("before, fitted, fresh seeds", r.before.fitted_fresh) << errors_row("before, held out, fresh seeds", r.before.held_out_fresh);

@@ -47,7 +47,7 @@ const std::vector<std::string> kSourceKeys{"citation", "method", "uncertainty"};
 const std::vector<std::string> kModelKeys{"scenario", "set", "replicates", "seed"};
 const std::vector<std::string> kObservableKeys{"kind", "scale", "uncertainty", "floor_relative"};
 const std::vector<std::string> kDesignKeys{"column", "key", "unit"};
-const std::vector<std::string> kFreeKeys{"key", "lo", "hi", "step"};
+const std::vector<std::string> kFreeKeys{"key", "lo", "hi", "step", "measured", "measured_se"};
 const std::vector<std::string> kPointsKeys{"csv"};
 const std::vector<std::string> kMethods{"measured", "digitized", "simulated"};
 const std::vector<std::string> kKinds{"j_paper", "j_mid", "j_flowing", "j_star", "mean_avalanche", "ln_s_plus_1",
@@ -150,6 +150,14 @@ FreeParameter read_free(StrictTable t) {
   f.hi = *hi;
   f.step = step.value_or((*hi - *lo) / 6);
   if (f.step <= 0 || f.step > f.hi - f.lo) t.fail("step", *t.get("step"), "must be > 0 and <= hi - lo");
+  const auto measured = t.number("measured", -big, big), measured_se = t.number("measured_se", 0, big);
+  if (measured && !measured_se) t.missing("measured_se", "required with measured: its standard error (key units, > 0)");
+  if (measured_se && !measured) t.missing("measured", "required with measured_se: the measured value (key units)");
+  if (measured_se && *measured_se <= 0) t.fail("measured_se", *t.get("measured_se"), "must be > 0");
+  if (measured && (*measured < f.lo || *measured > f.hi))
+    t.fail("measured", *t.get("measured"), fmt::format("must lie in [lo, hi] = [{}, {}]", f.lo, f.hi));
+  f.measured = measured.value_or(0.0);
+  f.measured_se = measured_se.value_or(0.0);
   return f;
 }
 

@@ -12,7 +12,7 @@
 //   [model]       scenario (relative to this file), set ["key=value", ...], replicates, seed
 //   [observable]  kind, scale, uncertainty (se | ci95), floor_relative  (the points' default observable)
 //   [[design]]    column, key, unit (d | lab)
-//   [[free]]      key, lo, hi, step
+//   [[free]]      key, lo, hi, step, and optionally measured, measured_se (an independent measurement)
 //   [points]      csv = "file.csv" (relative to this file)   -- or --   [[point]] rows
 // Each point: one value per design column, value, uncertainty, replicates, held_out,
 // and optionally observable (another kind than [observable]'s, measured on the same
@@ -70,6 +70,13 @@ struct FreeParameter {
   std::string key;   // scenario key ("particles.friction_particle")
   double lo = 0, hi = 0;
   double step = 0;   // physical step: grid spacing and finite-difference step (key units)
+  // An independent measurement of the parameter (the paper's friction from a tilt test: 0.28),
+  // with its standard error (key units; 0: none). It enters every fit as one more datum,
+  // ((value - measured) / measured_se)^2, so that the parameter cannot wander far from what was
+  // measured to absorb a missing effect. measured_se = 0: the parameter is free within [lo, hi].
+  double measured = 0;
+  double measured_se = 0;
+  bool has_measurement() const { return measured_se > 0; }
   SourceLocation where;
 };
 

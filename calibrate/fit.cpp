@@ -38,14 +38,44 @@ double chi2_of(const DataFile& data, const Prediction& p, bool held_out) {
   return chi2;
 }
 
-double deviance_of(const DataFile& data, const Prediction& p) {
-  double d = 0;
+double deviance_of(const DataFile& data, const Prediction& p, const ParameterSet& params) {
+  double d = measurement_chi2(data, params);  // the measurements' sigma is fixed: no log term
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     if (data.points[i].held_out) continue;
     const PointResidual r = point_residual(data, p, i);
     d += r.whitened * r.whitened + 2 * std::log(r.sigma);
   }
   return d;
+}
+
+double measurement_chi2(const DataFile& data, const ParameterSet& params) {
+  double chi2 = 0;
+  for (const FreeParameter& f : data.free) {
+    if (!f.has_measurement()) continue;
+    const double z = (params.get(f.key, f.measured) - f.measured) / f.measured_se;
+    chi2 += z * z;
+  }
+  return chi2;
+}
+
+int measured_count(const DataFile& data) {
+  return static_cast<int>(std::count_if(data.free.begin(), data.free.end(), [](const FreeParameter& f) { return f.has_measurement(); }));
+}
+
+MeasurementRows measurement_rows(const DataFile& data, const ParameterSet& params, const std::vector<std::string>& columns) {
+  MeasurementRows m;
+  const auto n = static_cast<Eigen::Index>(measured_count(data));
+  m.residual = Eigen::VectorXd::Zero(n);
+  m.sensitivity = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(columns.size()));
+  Eigen::Index row = 0;
+  for (const FreeParameter& f : data.free) {
+    if (!f.has_measurement()) continue;
+    m.residual(row) = (f.measured - params.get(f.key, f.measured)) / f.measured_se;
+    for (std::size_t c = 0; c < columns.size(); ++c)
+      if (columns[c] == f.key) m.sensitivity(row, static_cast<Eigen::Index>(c)) = 1 / f.measured_se;
+    ++row;
+  }
+  return m;
 }
 
 namespace {
@@ -254,7 +284,7 @@ ParameterSet fit_surface(const DataFile& data, const Surface& s, const Parameter
     const auto& c = *static_cast<Ctx*>(raw);
     ParameterSet p = *c.start;
     for (std::size_t k = 0; k < xv.size(); ++k) p = p.with((*c.vars)[k].key, xv[k]);
-    return deviance_of(*c.data, c.s->predict(p, *c.data));
+    return deviance_of(*c.data, c.s->predict(p, *c.data), p);
   };
   opt.set_min_objective(f, &ctx);
   double value = 0;
@@ -282,7 +312,7 @@ ProfileScan scan_profile(const DataFile& data, const Surface& s, const Parameter
     const double v = t.lo + (t.hi - t.lo) * k / kSteps;
     out.params.push_back(fit_surface(data, s, fitted.with(t.key, v), t.key));
     out.value.push_back(v);
-    out.deviance.push_back(deviance_of(data, s.predict(out.params.back(), data)));
+    out.deviance.push_back(deviance_of(data, s.predict(out.params.back(), data), out.params.back()));
   }
   out.best = static_cast<std::size_t>(std::min_element(out.deviance.begin(), out.deviance.end()) - out.deviance.begin());
   return out;
@@ -320,7 +350,7 @@ EffectFit fit_effect(const DataFile& data, const Surface& s, const ParameterSet&
   const EffectTerm& t = s.effects[e];
   EffectFit out;
   out.params = fit_surface(data, s, start);
-  double at_fit = deviance_of(data, s.predict(out.params, data));
+  double at_fit = deviance_of(data, s.predict(out.params, data), out.params);
   ProfileScan scan = scan_profile(data, s, out.params, t);
   // The response is piecewise linear in the effect's size, so the deviance has kinks at the
   // measured sizes, and BOBYQA from one start can stop at one. The scan is a global search
@@ -328,15 +358,15 @@ EffectFit fit_effect(const DataFile& data, const Surface& s, const ParameterSet&
   // profile is scanned again from there (its re-fits started from the local minimum).
   if (scan.deviance[scan.best] < at_fit) {
     const ParameterSet again = fit_surface(data, s, scan.params[scan.best]);
-    const double again_deviance = deviance_of(data, s.predict(again, data));
+    const double again_deviance = deviance_of(data, s.predict(again, data), again);
     const bool better = again_deviance < scan.deviance[scan.best];
     out.params = better ? again : scan.params[scan.best];
     at_fit = better ? again_deviance : scan.deviance[scan.best];
     out.restarted = true;
     scan = scan_profile(data, s, out.params, t);
   }
-  const double nu = std::max(1.0, static_cast<double>(data.fitted_count()) - fitted_parameters);
-  const double chi2_per_dof = chi2_of(data, s.predict(out.params, data)) / nu;
+  const double nu = std::max(1.0, static_cast<double>(data.fitted_count() + measured_count(data)) - fitted_parameters);
+  const double chi2_per_dof = (chi2_of(data, s.predict(out.params, data)) + measurement_chi2(data, out.params)) / nu;
   // The second scan starts from the restarted fit and could, rarely, find a still lower point;
   // the estimate is not moved again: the interval is the estimate's, counted from its deviance.
   out.interval = interval_around(scan, out.params.get(t.key, t.neutral), at_fit, chi2_per_dof);
@@ -370,7 +400,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
                   grid.size() * data.distinct_runs_per_replicate() * static_cast<std::size_t>(data.model_replicates)));
   const std::vector<Prediction> preds = ev.evaluate(grid);
   std::vector<double> chi2;
-  for (const Prediction& p : preds) chi2.push_back(chi2_of(data, p));
+  for (std::size_t k = 0; k < grid.size(); ++k) chi2.push_back(chi2_of(data, preds[k]) + measurement_chi2(data, grid[k]));
   const auto best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
   for (std::size_t k = 0; k < grid.size(); ++k)
     say(fmt::format("  {}: chi2 = {:.2f}{}", grid[k].label(), chi2[k], k == best ? "  <- best node" : ""));
@@ -401,8 +431,12 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return distance(nodes[a]) < distance(nodes[b]); });
   for (std::size_t k = 0; k < std::min<std::size_t>(3, order.size()); ++k)
     out.nodes.push_back(nodes[order[k]]), out.node_predictions.push_back(node_preds[order[k]]);
-  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f})", nodes.size(),
-                  out.params.label(), chi2_of(data, out.surface.predict(out.params, data))));
+  for (const FreeParameter& f : data.free)
+    if (f.has_measurement())
+      say(fmt::format("  {} measured {:.4g} +- {:.4g}: a datum of every fit", f.key, f.measured, f.measured_se));
+  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f}{})", nodes.size(),
+                  out.params.label(), chi2_of(data, out.surface.predict(out.params, data)) + measurement_chi2(data, out.params),
+                  measured_count(data) > 0 ? ", the measurements included" : ""));
   return out;
 }
 

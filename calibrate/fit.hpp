@@ -37,7 +37,22 @@ double chi2_of(const DataFile& data, const Prediction& p, bool held_out = false)
 // response carries the noise of its finite differences, growing beyond the measured sizes),
 // and chi^2 alone falls where that noise rises: minimised, it is drawn to wherever the model
 // is least certain (tests/test_calibration_fit.cpp). BIC is taken on it too.
-double deviance_of(const DataFile& data, const Prediction& p);
+// With `params`, the independent measurements of free parameters (FreeParameter::measured) are
+// added: they are data too, fitted like the points.
+double deviance_of(const DataFile& data, const Prediction& p, const ParameterSet& params);
+
+// The measurements' share of chi^2: sum over measured free parameters of ((value - measured)/se)^2.
+double measurement_chi2(const DataFile& data, const ParameterSet& params);
+// How many free parameters carry a measurement (each one more fitted datum).
+int measured_count(const DataFile& data);
+// The measurements' whitened residuals (measured - value)/se and, per measured parameter, its row
+// of the whitened sensitivities to `columns` keys: 1/se in its own column, 0 elsewhere (a
+// measurement sees its parameter only, no effect). Appended below the fitted points' rows.
+struct MeasurementRows {
+  Eigen::VectorXd residual;   // one per measured free parameter
+  Eigen::MatrixXd sensitivity;  // [measured][columns]
+};
+MeasurementRows measurement_rows(const DataFile& data, const ParameterSet& params, const std::vector<std::string>& columns);
 
 // An effect term of the surface: the shift of every point's fit-scale value when
 // the effect's key moves from its neutral value, measured under common random

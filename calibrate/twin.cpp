@@ -34,7 +34,7 @@ double drawn_size(const EffectDef& e, double neutral, const std::string& size, R
 
 std::string toml_quote(const std::string& s) { return fmt::format("\"{}\"", s); }
 
-void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, const Prediction& p,
+void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, const TwinTruth& truth, const Prediction& p,
                      const std::filesystem::path& data_out) {
   o << "# Made by `gapflow twin` from " << d.file.string() << ": simulated data for testing the calibration loop.\n";
   o << "# What was planted is in the truth file, never here.\n\n";
@@ -53,9 +53,14 @@ void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, con
   for (const DesignColumn& c : d.design)
     o << fmt::format("[[design]]\ncolumn = {}\nkey = {}\nunit = \"{}\"\n\n", toml_quote(c.column), toml_quote(c.key),
                      c.in_diameters ? "d" : "lab");
-  for (const FreeParameter& f : d.free)
-    o << fmt::format("[[free]]\nkey = {}\nlo = {}\nhi = {}\nstep = {}\n\n", toml_quote(f.key), number_text(f.lo),
+  for (std::size_t k = 0; k < d.free.size(); ++k) {
+    const FreeParameter& f = d.free[k];
+    o << fmt::format("[[free]]\nkey = {}\nlo = {}\nhi = {}\nstep = {}\n", toml_quote(f.key), number_text(f.lo),
                      number_text(f.hi), number_text(f.step));
+    if (f.has_measurement() && k < truth.measured.size() && std::isfinite(truth.measured[k]))
+      o << fmt::format("measured = {}\nmeasured_se = {}\n", number_text(truth.measured[k]), number_text(f.measured_se));
+    o << "\n";
+  }
   for (std::size_t i = 0; i < d.points.size(); ++i) {
     if (!p.valid[i])
       throw std::runtime_error(fmt::format("twin: the model gives no {} at point {} (e.g. a run never emptied)",
@@ -259,6 +264,15 @@ TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {
     }
     t.planted.push_back({name, e->key, value, neutral});
   }
+  // The measurements, from a stream of their own: every draw above is the same with and without them.
+  RandomStream meter(mix_seed(def.seed, 0x6d65746572ull));  // "meter"
+  for (const FreeParameter& f : design.free) {
+    double truth_value = kNaN;
+    for (const PlantedValue& v : t.planted)
+      if (v.name == "free" && v.key == f.key) truth_value = v.value;
+    const double read = truth_value + f.measured_se * meter.normal();
+    t.measured.push_back(f.has_measurement() && std::isfinite(truth_value) ? std::clamp(read, f.lo, f.hi) : kNaN);
+  }
   for (const std::string& s : def.set) {
     const std::size_t eq = s.find('=');
     if (eq == std::string::npos) throw std::invalid_argument("twin: --set takes key=value, not '" + s + "'");
@@ -277,7 +291,7 @@ TwinTruth make_twin(const DataFile& design, const TwinDef& def, Evaluator& evalu
   for (const PlantedValue& v : truth.planted) planted = planted.with(v.key, v.value);
   const Prediction p = evaluator.evaluate({planted}, truth.model_seed, def.replicates).front();
   truth.signal = planted_signal(design, def, truth, p, evaluator);
-  write_file_atomically(data_out, [&](std::ostream& o) { write_twin_file(o, design, def, p, data_out); });
+  write_file_atomically(data_out, [&](std::ostream& o) { write_twin_file(o, design, def, truth, p, data_out); });
   write_file_atomically(truth_out, [&](std::ostream& o) {
     o << "{\n  \"twin\": \"" << def.name << "\",\n  \"model\": \"" << to_string(def.model) << "\",\n";
     o << fmt::format("  \"seed\": {},\n  \"model_seed\": {},\n  \"replicates\": {},\n  \"planted\": [", def.seed,
@@ -287,7 +301,12 @@ TwinTruth make_twin(const DataFile& design, const TwinDef& def, Evaluator& evalu
       o << fmt::format("{}\n    {{\"name\": \"{}\", \"key\": \"{}\", \"value\": {}, \"neutral\": {}}}", i ? "," : "", v.name,
                        v.key, v.value, std::isfinite(v.neutral) ? fmt::format("{}", v.neutral) : "null");
     }
-    o << "\n  ],\n";
+    o << "\n  ],\n  \"measured\": {";
+    std::string sep;
+    for (std::size_t k = 0; k < design.free.size() && k < truth.measured.size(); ++k)
+      if (std::isfinite(truth.measured[k]))
+        o << fmt::format("{}\"{}\": {}", sep, design.free[k].key, truth.measured[k]), sep = ", ";
+    o << "},\n";
     const PlantedSignal& g = truth.signal;
     if (!g.known)
       o << "  \"signal\": null\n}\n";

@@ -212,6 +212,12 @@ TEST(DataFile, MalformedFilesAreRejectedWithKeyAndLine) {
   expect_error(p1 + p1 + "[[free]]\nkey = \"particles.friction_particle\"\nlo = 0.5\nhi = 0.1\n", "free.hi", head_lines + 12);
   expect_error(p1 + p1 + "[colour]\nx = 1\n", "colour", 0);
   expect_error(p1 + p1 + "[[free]]\nkey = \"run.seed\"\nlo = 0\nhi = 1\n", "free.key", 0);
+  // An independent measurement of a free parameter: both keys or neither, se > 0, inside [lo, hi].
+  const std::string free_head = "[[free]]\nkey = \"particles.friction_particle\"\nlo = 0.1\nhi = 0.5\n";
+  expect_error(p1 + p1 + free_head + "measured = 0.28\n", "free.measured_se", head_lines + 9);
+  expect_error(p1 + p1 + free_head + "measured_se = 0.03\n", "free.measured", head_lines + 9);
+  expect_error(p1 + p1 + free_head + "measured = 0.28\nmeasured_se = 0\n", "free.measured_se", head_lines + 14);
+  expect_error(p1 + p1 + free_head + "measured = 0.6\nmeasured_se = 0.03\n", "free.measured", head_lines + 13);
   // A design value the scenario refuses is located at its point.
   expect_error(p1 + "[[point]]\nW_over_d = 400\nvalue = 80\nuncertainty = 2\n", "bottleneck.gap_mm", head_lines + 5);
   // A length in diameters must be a number; the size itself cannot be given in sizes.
@@ -279,6 +285,35 @@ TEST(Twin, SetOfAFreeKeyIsItsTrueValueAndLeavesTheOtherDraws) {
   EXPECT_NE(drawn.planted[0].value, 0.24);
   EXPECT_EQ(fixed.planted[1].name, "linear_drag");
   EXPECT_DOUBLE_EQ(fixed.planted[1].value, drawn.planted[1].value);
+}
+
+// A design that declares a measurement of its free parameter gets, in each twin, a reading of
+// the true value with that standard error: drawn from a stream of its own (the other draws stay),
+// scattered as declared over many twins, and written into the twin so that it loads again.
+TEST(Twin, AMeasuredFreeParameterIsReadOffItsTrueValueWithTheDeclaredError) {
+  const DataFile design = load_data_file(source_path("data/blind/design.toml"));
+  ASSERT_EQ(design.free.size(), 1u);
+  ASSERT_TRUE(design.free[0].has_measurement());
+  const double se = design.free[0].measured_se;
+  std::vector<double> z;
+  for (std::uint64_t seed = 1; seed <= 400; ++seed) {
+    TwinDef def;
+    def.seed = seed;
+    const TwinTruth t = draw_twin(design, def);
+    ASSERT_EQ(t.measured.size(), 1u);
+    z.push_back((t.measured[0] - t.planted[0].value) / se);
+  }
+  const Summary zs = summarize(z);
+  EXPECT_NEAR(zs.mean, 0.0, 0.2);  // 400 draws: se of the mean 0.05
+  EXPECT_NEAR(zs.sd, 1.0, 0.15);
+  TwinDef def;
+  def.seed = 7;
+  def.effects = {"linear_drag"};
+  TwinDef without = def;
+  DataFile unmeasured = design;
+  unmeasured.free[0].measured_se = 0;
+  EXPECT_TRUE(std::isnan(draw_twin(unmeasured, without).measured[0]));
+  EXPECT_DOUBLE_EQ(draw_twin(unmeasured, without).planted[1].value, draw_twin(design, def).planted[1].value);
 }
 
 // A value on the twin's command line that is not a number names the option and the text.

@@ -95,5 +95,43 @@ TEST(EffectFit, TheIntervalHoldsAnEstimateWhoseWellIsNarrowerThanTheScan) {
   EXPECT_TRUE(fit.interval.bounded_lo && fit.interval.bounded_hi);
 }
 
+// A free parameter measured independently is a datum of the fit: on a surface linear in it,
+// the fit is the precision-weighted mean of what the points say and what was measured, and the
+// measurement's chi^2 joins the deviance. Points: both at value c + g (x - 0.3) with se 0.05;
+// the data (0.5 and 0.5) say x = 0.4 +- 0.0071; the measurement says 0.25 +- 0.01: the fit
+// gives 0.35, two thirds of the weight on the points.
+TEST(MeasuredFreeParameter, TheFitIsThePrecisionWeightedMean) {
+  const std::string key = "particles.friction_particle";
+  DataFile data = two_points(0.5, 0.5, 0.05);
+  FreeParameter f;
+  f.key = key, f.lo = 0.1, f.hi = 0.5, f.step = 0.05;
+  data.free = {f};
+  const double g = 5;  // d(value)/dx
+  Surface s;
+  s.keys = {key}, s.centre = {0.3}, s.half = {0.2}, s.lo = {0.1}, s.hi = {0.5};
+  for (int i = 0; i < 2; ++i) {
+    Eigen::VectorXd c(3);
+    c << 0.0, g * 0.2, 0.0;  // 1, x', x'^2 with x' = (x - 0.3)/0.2
+    s.coef.push_back(c);
+    s.cov.push_back(Eigen::MatrixXd::Zero(3, 3));
+    s.valid.push_back(true);
+  }
+  const double from_points = 0.3 + 0.5 / g, var_points = 0.05 * 0.05 / (2 * g * g);
+  EXPECT_NEAR(fit_surface(data, s, ParameterSet{}.with(key, 0.3)).get(key, -1), from_points, 1e-4);
+  data.free[0].measured = 0.25, data.free[0].measured_se = 0.01;
+  const double w_points = 1 / var_points, w_meas = 1 / (0.01 * 0.01);
+  const double expected = (w_points * from_points + w_meas * 0.25) / (w_points + w_meas);
+  const ParameterSet fitted = fit_surface(data, s, ParameterSet{}.with(key, 0.3));
+  EXPECT_NEAR(fitted.get(key, -1), expected, 1e-4);
+  EXPECT_NEAR(expected, 0.35, 1e-12);
+  const double x = fitted.get(key, -1);
+  EXPECT_NEAR(measurement_chi2(data, fitted), std::pow((x - 0.25) / 0.01, 2), 1e-9);
+  const MeasurementRows rows = measurement_rows(data, fitted, {"other", key});
+  ASSERT_EQ(rows.residual.size(), 1);
+  EXPECT_NEAR(rows.residual(0), (0.25 - x) / 0.01, 1e-9);
+  EXPECT_EQ(rows.sensitivity(0, 0), 0.0);
+  EXPECT_NEAR(rows.sensitivity(0, 1), 100.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace gapflow
