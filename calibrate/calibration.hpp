@@ -72,7 +72,8 @@ struct ModelState {
   ErrorMeasures fitted, held_out;
   ErrorMeasures fitted_fresh, held_out_fresh;  // the same parameters simulated directly on fresh seeds
   Prediction simulated_fresh;
-  double bic = 0;  // deviance + k ln n (up to a constant: compare states, never read alone)
+  double bic = 0;  // deviance + k ln n, n = fitted points + measured free parameters (up to a constant: compare
+                  // states, never read alone)
 };
 
 struct EffectDef;

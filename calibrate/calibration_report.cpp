@@ -225,6 +225,13 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                      r.held_out_fresh_fit_aware.per_dof(), r.held_out_fresh_fit_aware.p);
   o << fmt::format("\nParameters before: {}. After: {}. BIC {:.2f} -> {:.2f}.\n", r.before.params.label(), r.after.params.label(),
                    r.before.bic, r.after.bic);
+  // Where a measured parameter ended, in its measurement's standard errors: a poor fit that comes
+  // from pulling against the measurement reads differently from one the points alone show.
+  for (const FreeParameter& f : data.free)
+    if (f.has_measurement())
+      o << fmt::format("`{}` against its measurement {:.4g} +- {:.4g}: {:+.2f} se before, {:+.2f} se after.\n", f.key,
+                       f.measured, f.measured_se, (r.before.params.get(f.key, f.measured) - f.measured) / f.measured_se,
+                       (r.after.params.get(f.key, f.measured) - f.measured) / f.measured_se);
   o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates. A step whose paired chi2 stays below 4 per fitted point (2 se a point) leaves a signature mostly noise: the effect is moved again to the end of its range (or as far toward it as every point allows) and the step that moved the model more clearly is used (*step -> end*: the end; *step (end tried)*: the first), visible then at half the level (the better of two looks). *Left by the fit*: the share of the signature's length that the fitted parameters cannot mimic, |P u| / |u| (whitened): near 0, the effect is absorbed by the fit in this design, and whatever of it the data hold ends up in the fitted parameters; a design that varies what tells them apart is needed to see it.\n";
   for (std::size_t i = 0; i < r.rounds.size(); ++i) {
     const Round& rd = r.rounds[i];

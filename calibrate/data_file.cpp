@@ -150,12 +150,11 @@ FreeParameter read_free(StrictTable t) {
   f.hi = *hi;
   f.step = step.value_or((*hi - *lo) / 6);
   if (f.step <= 0 || f.step > f.hi - f.lo) t.fail("step", *t.get("step"), "must be > 0 and <= hi - lo");
-  const auto measured = t.number("measured", -big, big), measured_se = t.number("measured_se", 0, big);
+  // A reading may lie outside [lo, hi] (that bounds the fit, not a noisy measurement).
+  const auto measured = t.number("measured", -big, big), measured_se = t.number("measured_se", -big, big);
   if (measured && !measured_se) t.missing("measured_se", "required with measured: its standard error (key units, > 0)");
   if (measured_se && !measured) t.missing("measured", "required with measured_se: the measured value (key units)");
-  if (measured_se && *measured_se <= 0) t.fail("measured_se", *t.get("measured_se"), "must be > 0");
-  if (measured && (*measured < f.lo || *measured > f.hi))
-    t.fail("measured", *t.get("measured"), fmt::format("must lie in [lo, hi] = [{}, {}]", f.lo, f.hi));
+  if (measured_se && *measured_se <= 0) t.fail("measured_se", *t.get("measured_se"), "must be a number > 0 (a standard error, key units)");
   f.measured = measured.value_or(0.0);
   f.measured_se = measured_se.value_or(0.0);
   return f;

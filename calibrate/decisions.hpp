@@ -44,7 +44,7 @@ enum class Attribute {
 Attribute should_attribute(double residual_p, bool any_visible, double best_p_adjusted, double alpha);
 
 struct KeepEvidence {
-  double bic_before = 0, bic_after = 0;    // the fitted points (deviance + k ln n)
+  double bic_before = 0, bic_after = 0;    // the fitted points (deviance + k ln n; n counts measured free parameters)
   int held_out_n = 0;                      // held-out points (0: the held-out test passes)
   double held_before = 0, held_after = 0;  // their chi^2, keep-test seeds
 };

@@ -7,7 +7,8 @@
 // a u~ (u~ = P u, its signature per unit with the fitted parameters projected out,
 // attribution.hpp), a noncentrality lambda = (a / se)^2 with se = 1/|u~|, for both gates
 // the loop puts before any attribution (decisions.hpp rule 1):
-//   - the fitted points' chi^2 over nu = n - k degrees of freedom beyond its 1 - alpha quantile;
+//   - the fitted points' chi^2 over nu = n + m - k degrees of freedom (m: measured free
+//     parameters, data of the fit too) beyond its 1 - alpha quantile;
 //   - the candidate's score (chi^2_1) beyond its Bonferroni level alpha / (visible candidates).
 // The smallest detectable departure is sqrt(lambda*) se, lambda* the smallest noncentrality at
 // which each has the stated power. Below it a departure passes the gates less often than that
@@ -60,7 +61,7 @@ struct DetectabilityDef {
 };
 
 // One entry per candidate of the round measured at the baseline fit (the first round), in its
-// order; `residual_dof` = fitted points - fitted parameters. Empty for no round.
+// order; `residual_dof` = fitted points + measured free parameters - fitted parameters. Empty for no round.
 std::vector<Detectability> detectability_at_baseline(const Round& baseline_round, int residual_dof,
                                                      const DetectabilityDef& def = {});
 

@@ -47,7 +47,7 @@ struct PlantedSignal {
 struct TwinTruth {
   std::vector<PlantedValue> planted;
   // Per free parameter of the design: what an independent measurement of its true value read
-  // (the design's measured_se of error, drawn from the twin's seed; clamped to [lo, hi]), or NaN
+  // (the design's measured_se of error, drawn from the twin's seed), or NaN
   // when the design declares no measurement. Written into the twin as `measured`.
   std::vector<double> measured;
   std::uint64_t model_seed = 0;  // run.seed of the twin's runs (never the calibration's)
