@@ -4,8 +4,8 @@
 # the 2D model; then the summary (confusion matrix, interval coverage, null
 # false-positive rate, held-out error before/after) in OUT/report.md.
 #
-#   studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET]
-#       (default results/calibration-blind, all cores, offset 0)
+#   studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN]
+#       (default results/calibration-blind, all cores, offset 0, data/blind/design.toml)
 #
 # SEED_OFFSET is added to every case's seed: another offset draws another set of twins (other
 # sizes, other data noise) for the same cases, to test rules chosen after seeing one set on
@@ -21,7 +21,7 @@ out=${1:-results/calibration-blind}
 jobs=${2:-$(nproc)}
 seed_offset=${3:-0}
 gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
-design=data/blind/design.toml
+design=${4:-data/blind/design.toml}
 mkdir -p "$out/twins" "$out/truth"
 # Twins and summaries of one seed offset must not be mixed with another's (an OUT with twins and
 # no record was made before the offset existed: offset 0).
@@ -33,6 +33,12 @@ if [[ -n $recorded && $recorded != "$seed_offset" ]]; then
   exit 2
 fi
 echo "$seed_offset" > "$out/seed_offset"
+# Likewise the design: twins of one design are never calibrated beside another's.
+if [[ -f $out/design && $(cat "$out/design") != "$design" ]]; then
+  echo "error: $out was made from $(cat "$out/design"), not $design; use another OUT" >&2
+  exit 2
+fi
+echo "$design" > "$out/design"
 
 # id  model  seed  planted (effect:NAME:SIZE | set:KEY=VALUE), space-separated
 cases="
