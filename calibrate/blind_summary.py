@@ -108,6 +108,9 @@ def main(out):
             "truth": label,
             "planted": "; ".join(f"{p['key']}={p['value']:.4g}" for p in planted),
             "free_truth": "; ".join(f"{p['key']}={p['value']:.4g}" for p in truth["planted"] if p["name"] == "free"),
+            # Where the fit left each free parameter, less its true value (after everything).
+            "free_offset": [a["params"].get(p["key"], float("nan")) - p["value"] for p in truth["planted"]
+                            if p["name"] == "free"],
             "said": verdict,
             "verdict": summary["verdict"],
             "added": "; ".join(f"{x['key']}={x['value']:.4g} [{x['lo95']:.4g}, {x['hi95']:.4g}]" for x in added),
@@ -139,8 +142,11 @@ def main(out):
     with open(out / "cases.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
         w.writeheader()
-        w.writerows(rows)
+        w.writerows({**r, "free_offset": "; ".join(f"{x:+.4f}" for x in r["free_offset"])} for r in rows)
 
+    # The design the twins were made from (the script records it from pass 10 on; before, the first one).
+    design_file = out / "design"
+    design = design_file.read_text().strip() if design_file.exists() else "data/blind/design.toml"
     single = [r for r in rows if r["truth"] not in ("none", "two effects", "outside the catalogue", "3D model")]
     nulls = [r for r in rows if r["truth"] == "none"]
     outside = [r for r in rows if r["truth"] == "outside the catalogue"]
@@ -161,6 +167,16 @@ def main(out):
     with_excess = [r for r in found_rows if excess(r["heldout_rms_sigma_before"]) > 0]
     excess_halved = sum(1 for r in with_excess
                         if excess(r["heldout_rms_sigma_after"]) <= 0.5 * excess(r["heldout_rms_sigma_before"]))
+
+    excess_before = sum(excess(r["heldout_rms_sigma_before"]) for r in with_excess)
+    excess_after = sum(excess(r["heldout_rms_sigma_after"]) for r in with_excess)
+    excess_ratios = sorted(excess(r["heldout_rms_sigma_after"]) / excess(r["heldout_rms_sigma_before"]) for r in with_excess)
+    # One free parameter (the blind designs): how far the fit left it from the truth, in the single
+    # effects identified (an effect the fit took in shows there) and in the nulls (the noise).
+    def offsets(rs):
+        return [r["free_offset"][0] for r in rs if len(r["free_offset"]) == 1]
+    offsets_found = offsets([r for r in single if r["identified"] is True])
+    offsets_null = offsets(nulls)
 
     visible = [r for r in single if r["visible"] is True]
     hidden = [r for r in single if r["visible"] is False]
@@ -212,7 +228,7 @@ def main(out):
     lines = [
         "# Calibration loop: blind study",
         "",
-        "Made by `studies/calibration_blind.sh` (twins of `data/blind/design.toml`, each calibrated blind with the 2D model; "
+        f"Made by `studies/calibration_blind.sh` (twins of `{design}`, each calibrated blind with the 2D model; "
         f"this page by `/usr/bin/python3 calibrate/blind_summary.py {out}`). Truth per twin in `truth/`, "
         "each calibration's report data in `<case>/`, one row per twin in `cases.csv`.",
         "",
@@ -228,6 +244,12 @@ def main(out):
         f"* the same in units of the noise: held-out error beyond the noise, sqrt(rms^2 - 1) of the whitened residuals "
         f"(fresh seeds), at least halved in {pct(excess_halved, len(with_excess))} of the found cases that had such an "
         f"error ({len(found_rows) - len(with_excess)} found cases had none: their held-out points were already at the noise)",
+        f"* that excess summed over those cases: {excess_before:.1f} -> {excess_after:.1f}; its ratio after / before, "
+        f"median {statistics.median(excess_ratios) if excess_ratios else float('nan'):.2f}",
+        f"* the free parameter's fitted value less its truth: in the single effects identified, median |offset| "
+        f"{statistics.median(abs(x) for x in offsets_found) if offsets_found else float('nan'):.3f}, range "
+        f"[{min(offsets_found, default=float('nan')):+.3f}, {max(offsets_found, default=float('nan')):+.3f}]; in the nulls "
+        f"{', '.join(f'{x:+.3f}' for x in offsets_null) or 'none'}",
         f"* single planted effects visible in their data (oracle power >= {VISIBLE_POWER}): {len(visible)} of {len(single)}; "
         f"of these identified: {pct(ident_visible, len(visible))}",
         f"* single planted effects not visible in their data: {len(hidden)}; the loop said \"none\" (the right answer for "
