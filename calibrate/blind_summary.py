@@ -174,7 +174,7 @@ def main(out):
     # One free parameter (the blind designs): how far the fit left it from the truth, in the single
     # effects identified (an effect the fit took in shows there) and in the nulls (the noise).
     def offsets(rs):
-        return [r["free_offset"][0] for r in rs if len(r["free_offset"]) == 1]
+        return [r["free_offset"][0] for r in rs if len(r["free_offset"]) == 1 and math.isfinite(r["free_offset"][0])]
     offsets_found = offsets([r for r in single if r["identified"] is True])
     offsets_null = offsets(nulls)
 

@@ -151,7 +151,8 @@ double smoothed_minimum(const std::vector<double>& y, std::size_t best) {
   return m;
 }
 
-// lambda = min over the free parameter of planted_noncentrality: how far the data with the
+// lambda = min over the free parameter of planted_noncentrality (plus, where the twin carries a
+// reading of it, that measurement's chi^2 about the true value): how far the data with the
 // planted effects lie from everything the model without them can reach by refitting
 // (the nonlinear projection; friction saturates, so a linear one overstates lambda).
 // One free parameter: its calibration grid, smoothed by a least-squares parabola around
@@ -177,14 +178,12 @@ PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const T
   // A measured free parameter is a datum of the calibration's refit: the oracle's refit pays for
   // moving it away from its true value (where the reading lies in expectation) as the loop pays
   // for moving it from the reading.
-  if (design.free.size() == 1 && design.free.front().has_measurement()) {
+  // Only where the twin carries a reading (its free parameter's true value was drawn or set).
+  if (design.free.size() == 1 && !truth.measured.empty() && std::isfinite(truth.measured.front())) {
     const FreeParameter& f = design.free.front();
-    const double truth_value = [&] {
-      for (const PlantedValue& v : truth.planted)
-        if (v.name == "free" && v.key == f.key) return v.value;
-      return f.measured;
-    }();
-    for (std::size_t k = 0; k < sets.size(); ++k) chi2[k] += std::pow((sets[k].get(f.key, truth_value) - truth_value) / f.measured_se, 2);
+    for (const PlantedValue& v : truth.planted)
+      if (v.name == "free" && v.key == f.key)
+        for (std::size_t k = 0; k < sets.size(); ++k) chi2[k] += std::pow((sets[k].get(f.key, v.value) - v.value) / f.measured_se, 2);
   }
   const std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
   if (!std::isfinite(chi2[best])) return sig;  // no node gives every point a value: nothing to compare

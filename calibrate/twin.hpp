@@ -38,7 +38,8 @@ struct PlantedValue {
 struct PlantedSignal {
   bool known = false;     // false: nothing planted (a null twin, or the other model's data as they are)
   double chi2 = 0;        // lambda = min over the free parameter of chi^2(data, model without the effects) less the
-                          // paired runs' own noise: the noncentrality, fitted points (dimensionless)
+                          // paired runs' own noise, over the fitted points, plus the measurement's chi^2 about the
+                          // true value where the twin carries a reading: the noncentrality (dimensionless)
   int points = 0;         // fitted points
   double critical = 0;    // the score test's threshold, Bonferroni over every applicable effect (the loop: visible ones)
   double oracle_power = 0;// P(score > critical) for a score test that knew the planted signature
