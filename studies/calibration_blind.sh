@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The calibration loop's blind study: twins of data/blind/design.toml with hidden
+# The calibration loop's blind study: twins of a design (data/blind/design.toml unless DESIGN) with hidden
 # effects of hidden sizes (drawn from each case's seed), each calibrated blind with
 # the 2D model; then the summary (confusion matrix, interval coverage, null
 # false-positive rate, held-out error before/after) in OUT/report.md.
@@ -33,9 +33,15 @@ if [[ -n $recorded && $recorded != "$seed_offset" ]]; then
   exit 2
 fi
 echo "$seed_offset" > "$out/seed_offset"
-# Likewise the design: twins of one design are never calibrated beside another's.
-if [[ -f $out/design && $(cat "$out/design") != "$design" ]]; then
-  echo "error: $out was made from $(cat "$out/design"), not $design; use another OUT" >&2
+# Likewise the design: twins of one design are never calibrated beside another's (an OUT with twins
+# and no record was made before the design could be chosen: data/blind/design.toml).
+[[ -f $design ]] || { echo "error: no design file $design" >&2; exit 2; }
+design=$(realpath --relative-to=. "$design")
+recorded_design=""
+if [[ -f $out/design ]]; then recorded_design=$(cat "$out/design")
+elif compgen -G "$out/twins/*.toml" > /dev/null; then recorded_design=data/blind/design.toml; fi
+if [[ -n $recorded_design && $recorded_design != "$design" ]]; then
+  echo "error: $out was made from $recorded_design, not $design; use another OUT" >&2
   exit 2
 fi
 echo "$design" > "$out/design"
