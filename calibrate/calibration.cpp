@@ -389,7 +389,9 @@ class Loop {
     // On the surface a held-out point's prediction carries the finite-difference noise of
     // the effect's measured response there, which can outweigh its data's error.
     const HeldOutCheck held = held_out_check(data_, def_, ev_, against.params, t.fit.params);
-    t.evidence = {against.bic, t.after.bic, held.n, held.before, held.after};
+    // At its neutral value (within 1e-3 of its range) the effect changes nothing.
+    const bool at_neutral = std::abs(t.fit.params.get(e.key, c.neutral) - c.neutral) <= 1e-3 * (e.hi - e.lo);
+    t.evidence = {against.bic, t.after.bic, held.n, held.before, held.after, at_neutral};
     t.verdict = keep_verdict(t.evidence, def_.decisive_bic);
     return t;
   }
@@ -478,10 +480,10 @@ class Loop {
   }
 
   static std::string rejected_text(const Candidate& c, const Trial& t) {
-    return fmt::format("best candidate {} (adjusted p = {:.3g}) rejected: BIC {:.1f} -> {:.1f}, held-out chi2 "
+    return fmt::format("best candidate {} (adjusted p = {:.3g}) rejected{}: BIC {:.1f} -> {:.1f}, held-out chi2 "
                        "(keep-test seeds) {:.1f} -> {:.1f}",
-                       c.effect, c.p_adjusted, t.evidence.bic_before, t.evidence.bic_after, t.evidence.held_before,
-                       t.evidence.held_after);
+                       c.effect, c.p_adjusted, t.verdict == Keep::at_neutral ? " (fitted at its neutral value)" : "",
+                       t.evidence.bic_before, t.evidence.bic_after, t.evidence.held_before, t.evidence.held_after);
   }
 
   const DataFile& data_;

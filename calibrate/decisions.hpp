@@ -47,12 +47,14 @@ struct KeepEvidence {
   double bic_before = 0, bic_after = 0;    // the fitted points (deviance + k ln n; n counts measured free parameters)
   int held_out_n = 0;                      // held-out points (0: the held-out test passes)
   double held_before = 0, held_after = 0;  // their chi^2, keep-test seeds
+  bool at_neutral = false;                 // the effect was fitted at its neutral value: it acts nowhere
 };
 
 enum class Keep {
   keep,
   bic_not_better,      // BIC did not fall
   held_out_worse,      // BIC fell but the held-out points got worse beyond what its evidence allows
+  at_neutral,          // the fitted size is the neutral value: whatever improved, the effect did not do it
 };
 
 // A BIC drop this large (Bayes factor ~ e^(drop/2)) is decisive evidence.

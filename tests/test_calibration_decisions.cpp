@@ -125,6 +125,17 @@ TEST(KeepDecision, BicMustFall) {
   EXPECT_EQ(keep_verdict({.bic_before = 10, .bic_after = 12, .held_out_n = 0}, 10), Keep::bic_not_better);
 }
 
+TEST(KeepDecision, AnEffectFittedAtItsNeutralValueIsNeverKept) {
+  // Blind pass 10's drag-high: spinning friction fitted at 0 mm (its neutral), BIC -152.9 -> -221.8,
+  // held-out chi^2 62.7 -> 26.9.
+  EXPECT_EQ(keep_verdict({.bic_before = -152.9, .bic_after = -221.8, .held_out_n = 12, .held_before = 62.7,
+                          .held_after = 26.9, .at_neutral = true}, 10),
+            Keep::at_neutral);
+  EXPECT_EQ(keep_verdict({.bic_before = -152.9, .bic_after = -221.8, .held_out_n = 12, .held_before = 62.7,
+                          .held_after = 26.9}, 10),
+            Keep::keep);
+}
+
 TEST(KeepDecision, WithoutHeldOutPointsAFallingBicIsEnough) {
   EXPECT_EQ(keep_verdict({.bic_before = 10, .bic_after = 9, .held_out_n = 0}, 10), Keep::keep);
 }
