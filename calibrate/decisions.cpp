@@ -15,9 +15,10 @@ Attribute should_attribute(double residual_p, bool any_visible, double best_p_ad
 bool decisive(const KeepEvidence& e, double decisive_bic) { return e.bic_before - e.bic_after >= decisive_bic; }
 
 Keep keep_verdict(const KeepEvidence& e, double decisive_bic) {
-  // Blind pass 10's drag-high kept spinning friction at 0 [0, 0.03] mm as a second effect (BIC
-  // -152.9 -> -221.8): at its neutral value the effect changes no run, so the gain came from the
-  // surface the trial re-measured, not from the effect, and the effect must not be reported.
+  // At its neutral value an effect changes no run: whatever a trial gained, the effect did not,
+  // and it must not be reported. Blind pass 10's drag-high kept spinning friction at 0 [0, 0.03]
+  // mm as a second effect (BIC -152.9 -> -221.8): the gain was the friction's, which the first
+  // effect's fit had left at a bound (mended in fit_surface's second start); this stays as a guard.
   if (e.at_neutral) return Keep::at_neutral;
   if (!(e.bic_after < e.bic_before)) return Keep::bic_not_better;
   // "Improves" must be a test, not a coin flip: where the held-out points barely feel the

@@ -43,6 +43,8 @@ double deviance_of(const DataFile& data, const Prediction& p, const ParameterSet
 
 // The measurements' share of chi^2: sum over measured free parameters of ((value - measured)/se)^2.
 double measurement_chi2(const DataFile& data, const ParameterSet& params);
+// chi^2 of everything fitted: the fitted points (chi2_of) and the measurements at `params`.
+double fitted_chi2(const DataFile& data, const Prediction& p, const ParameterSet& params);
 // How many free parameters carry a measurement (each one more fitted datum).
 int measured_count(const DataFile& data);
 // The measurements' whitened residuals (measured - value)/se and, per measured parameter, its row

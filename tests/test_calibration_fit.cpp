@@ -95,6 +95,30 @@ TEST(EffectFit, TheIntervalHoldsAnEstimateWhoseWellIsNarrowerThanTheScan) {
   EXPECT_TRUE(fit.interval.bounded_lo && fit.interval.bounded_hi);
 }
 
+// The surface need not be convex in a free parameter. Here both points follow f = -x'^2 + 0.3 x'
+// (x' = (x - 0.3)/0.2 over the nodes [0.1, 0.5]) and were measured at -2: the deviance is lowest at
+// x = 0.1 (f = -1.3); x = 0.5 (f = -0.7) is a local minimum at the upper bound, where a search
+// started there stays (blind pass 10's drag-high kept the friction at 0.5 that way). The fit
+// starts a second search from the nodes' centre and keeps the lower.
+TEST(SurfaceFit, ASearchStartedAtABoundLocalMinimumStillFindsTheLowerOne) {
+  const std::string key = "particles.friction_particle";
+  const DataFile data = two_points(-2.0, -2.0, 0.05);
+  Surface s;
+  s.keys = {key}, s.centre = {0.3}, s.half = {0.2}, s.lo = {0.1}, s.hi = {0.5};
+  for (int i = 0; i < 2; ++i) {
+    Eigen::VectorXd c(3);
+    c << 0.0, 0.3, -1.0;  // 1, x', x'^2
+    s.coef.push_back(c);
+    s.cov.push_back(Eigen::MatrixXd::Zero(3, 3));
+    s.valid.push_back(true);
+  }
+  const double at_hi = deviance_of(data, s.predict(ParameterSet{}.with(key, 0.5), data), ParameterSet{}.with(key, 0.5));
+  const double at_lo = deviance_of(data, s.predict(ParameterSet{}.with(key, 0.1), data), ParameterSet{}.with(key, 0.1));
+  ASSERT_LT(at_lo, at_hi) << "the set-up lost its lower minimum";
+  EXPECT_NEAR(fit_surface(data, s, ParameterSet{}.with(key, 0.5)).get(key, -1), 0.1, 1e-4);
+  EXPECT_NEAR(fit_surface(data, s, ParameterSet{}.with(key, 0.1)).get(key, -1), 0.1, 1e-4);
+}
+
 // A free parameter measured independently is a datum of the fit: on a surface linear in it,
 // the fit is the precision-weighted mean of what the points say and what was measured, and the
 // measurement's chi^2 joins the deviance. Points: both at value c + g (x - 0.3) with se 0.05;
