@@ -293,6 +293,7 @@ class Loop {
 
   // Rounds of attribution (steps 2-4 of calibration.hpp), from the baseline's state.
   void attribute(const BaselineFit& base, Surface& surface, ModelState& state) {
+    base_ = &base;
     std::vector<EffectTerm> terms;
     const Reference baseline = EffectResponses::baseline_reference(base);
     std::vector<Candidate> cands = responses_.signatures(baseline, terms);
@@ -302,8 +303,9 @@ class Loop {
       const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
       if (!worth_trying(round, state, best)) break;
       if (!reference) reference = responses_.reference_with(base, state.params, surface.effects);
-      const Candidate chosen = *best;
-      const Trial trial = try_effect(chosen, terms, *reference, surface, state, state);
+      Trial trial = contest(round, terms, *reference, surface, state);
+      const Candidate chosen = *find(round, round.best);
+      judge(trial, chosen, state);
       if (trial.verdict == Keep::keep) {
         round.decision = added_text(chosen, round, trial, state.bic);
         say(round.decision);
@@ -361,11 +363,53 @@ class Loop {
     return false;
   }
 
-  // The candidate's response measured at the reference (at the baseline: its signature's term,
-  // measured there, with the refinement sizes; with effects added: every size measured anew with
-  // them), fitted jointly with everything in `surface` from `from`, tested against `against`.
+  // Which candidate the round tries (decisions.hpp, rule 4): with one significant candidate,
+  // the best score; with more, each fitted in full and the lowest BIC. Sets round.best, .fits
+  // and .rivals accordingly; returns the chosen one's fitted trial (not yet judged).
+  Trial contest(Round& round, const std::vector<EffectTerm>& terms, const Reference& ref, const Surface& surface,
+                const ModelState& state) {
+    std::vector<const Candidate*> visible;
+    std::vector<double> score, p_adjusted;
+    for (const Candidate& c : round.candidates)
+      if (c.visible) visible.push_back(&c), score.push_back(c.score.statistic), p_adjusted.push_back(c.p_adjusted);
+    const std::vector<int> picks = contenders(score, p_adjusted, def_.alpha, def_.contenders);
+    if (picks.size() < 2) return fit_trial(*find(round, round.best), terms, ref, surface, state);
+    std::vector<Trial> trials;
+    std::vector<double> bic;
+    for (int m : picks) {
+      const Candidate& c = *visible[static_cast<std::size_t>(m)];
+      trials.push_back(fit_trial(c, terms, ref, surface, state));
+      bic.push_back(trials.back().after.bic);
+      round.fits.push_back({c.effect, trials.back().fit.params.get(c.key, c.neutral), bic.back()});
+    }
+    const FitChoice choice = choose_by_fit(bic, chi_square_quantile(1 - def_.alpha, 1));
+    std::vector<std::string> rivals;
+    for (int r : choice.rivals) rivals.push_back(round.fits[static_cast<std::size_t>(r)].effect);
+    for (const std::string& name : round.rivals)  // the score's rivals the fits did not reach
+      if (std::none_of(round.fits.begin(), round.fits.end(), [&](const ContenderFit& f) { return f.effect == name; }))
+        rivals.push_back(name);
+    round.rivals = rivals;
+    round.best = round.fits[static_cast<std::size_t>(choice.winner)].effect;
+    std::vector<std::string> listed;
+    for (const ContenderFit& f : round.fits) listed.push_back(fmt::format("{} {:.4g} (BIC {:.1f})", f.effect, f.value, f.bic));
+    say(fmt::format("{} significant candidates fitted in full: {}; tried: {}", picks.size(), fmt::join(listed, ", "),
+                    round.best));
+    return std::move(trials[static_cast<std::size_t>(choice.winner)]);
+  }
+
+  // fit_trial, then judge.
   Trial try_effect(const Candidate& c, const std::vector<EffectTerm>& signature_terms, const Reference& ref,
                    const Surface& surface, const ModelState& from, const ModelState& against) {
+    Trial t = fit_trial(c, signature_terms, ref, surface, from);
+    judge(t, c, against);
+    return t;
+  }
+
+  // The candidate's response measured at the reference (at the baseline: its signature's term,
+  // measured there, with the refinement sizes; with effects added: every size measured anew with
+  // them), fitted jointly with everything in `surface` from `from`.
+  Trial fit_trial(const Candidate& c, const std::vector<EffectTerm>& signature_terms, const Reference& ref,
+                  const Surface& surface, const ModelState& from) {
     Trial t;
     t.surface = surface;
     if (surface.effects.empty()) {
@@ -382,7 +426,48 @@ class Loop {
     t.fit = fit_effect(data_, t.surface, start, t.surface.effects.size() - 1, k);
     if (t.fit.restarted)
       say(fmt::format("{}: the first fit stopped at a local minimum; restarted from the profile scan's best value", e.name));
+    // The response holds where it was measured: a fit that moved the free parameters nearer other
+    // surface nodes has its effect measured again there, and is repeated from where it stopped (once).
+    if (!measured_near(ref, t.fit.params)) {
+      say(fmt::format("{}: the fit moved the free parameters to {}; its response is measured again at the nodes nearest",
+                      e.name, free_label(t.fit.params)));
+      const Reference near = responses_.reference_with(*base_, t.fit.params, surface.effects);
+      t.surface = surface;
+      t.surface.effects.push_back(responses_.measure_term(c, near));
+      const ParameterSet first = t.fit.params;
+      t.fit = fit_effect(data_, t.surface, first, t.surface.effects.size() - 1, k);
+      say(fmt::format("{}: re-fitted on the response measured there: {} = {:.4g} (was {:.4g}), {}", e.name, e.key,
+                      t.fit.params.get(e.key, c.neutral), first.get(e.key, c.neutral), free_label(t.fit.params)));
+    }
     t.after = make_state(data_, t.fit.params, t.surface.predict(t.fit.params, data_), k);
+    return t;
+  }
+
+  // Whether `ref`'s nodes are the surface nodes nearest `fitted` (in the free parameters).
+  bool measured_near(const Reference& ref, const ParameterSet& fitted) const {
+    auto free_values = [&](const ParameterSet& n) {
+      std::vector<double> v;
+      for (const std::string& key : base_->surface.keys) v.push_back(n.get(key, 0));
+      return v;
+    };
+    std::vector<std::vector<double>> want, have;
+    for (std::size_t k : nearest_nodes(base_->surface_nodes, base_->surface, fitted))
+      want.push_back(free_values(base_->surface_nodes[k]));
+    for (const ParameterSet& n : ref.nodes) have.push_back(free_values(n));
+    std::sort(want.begin(), want.end());
+    std::sort(have.begin(), have.end());
+    return want == have;
+  }
+
+  std::string free_label(const ParameterSet& p) const {
+    std::vector<std::string> parts;
+    for (const std::string& key : base_->surface.keys) parts.push_back(fmt::format("{} = {:.4g}", key, p.get(key, 0)));
+    return fmt::format("{}", fmt::join(parts, ", "));
+  }
+
+  // The keep test of a fitted trial against the state `against`: t.evidence, t.verdict.
+  void judge(Trial& t, const Candidate& c, const ModelState& against) {
+    const EffectDef& e = *find_effect(c.effect);
     // The held-out test by direct simulation, not on the surface: both parameter sets run
     // on seeds of their own (common to both, so that their difference is not the packing;
     // not the final re-score's, which must not have decided anything).
@@ -393,7 +478,6 @@ class Loop {
     const bool at_neutral = std::abs(t.fit.params.get(e.key, c.neutral) - c.neutral) <= 1e-3 * (e.hi - e.lo);
     t.evidence = {against.bic, t.after.bic, held.n, held.before, held.after, at_neutral};
     t.verdict = keep_verdict(t.evidence, def_.decisive_bic);
-    return t;
   }
 
   // After `first` was vetoed by the held-out test on decisive BIC evidence: the best candidate
@@ -492,6 +576,7 @@ class Loop {
   CalibrationResult& out_;
   EffectResponses responses_;
   int n_free_;
+  const BaselineFit* base_ = nullptr;  // set by attribute()
 };
 
 }  // namespace

@@ -20,7 +20,9 @@
 //   4. only when the fitted residual is beyond the noise (chi^2 p < alpha) and the
 //      best candidate is significant (calibrate/decisions.hpp): that candidate is
 //      fitted jointly with the free parameters (BOBYQA), its size given with a
-//      profile interval, and kept only if BIC and the held-out chi^2 both improve; a
+//      profile interval, and kept only if BIC and the held-out chi^2 both improve (when
+//      several candidates are significant, each is fitted so and the lowest BIC is the
+//      one tried: the score's ranking is linear, decisions.hpp rule 4); a
 //      second round may add one more, its response measured anew with the first
 //      effect in place (calibrate/effect_responses.hpp: effects do not add up). A
 //      first effect with decisive BIC evidence that the held-out points veto is tried
@@ -46,6 +48,7 @@ struct CalibrationDef {
   double weak_signature_chi2_per_point = 4;  // below this paired chi^2 per fitted point (2 se a point), a
                                    // signature is measured again at its range's end (dimensionless)
   int max_effects = 2;             // rounds of "add an effect"
+  int contenders = 3;              // significant candidates fitted in full before one is tried (decisions.hpp, rule 4)
   int grid_max = 9;                // grid nodes of a one-parameter baseline fit
   int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)
   std::uint64_t fresh_seed_offset = 7919;  // run.seed offset of the fresh-seed re-score (reported, decides nothing)
@@ -97,12 +100,23 @@ struct Candidate {
   int group = -1;              // index into the round's groups
 };
 
+// A contender of a round fitted in full on its measured response (decisions.hpp, rule 4).
+struct ContenderFit {
+  std::string effect;
+  double value = 0;  // fitted size (key units)
+  double bic = 0;    // of the state with it (same number of parameters for every contender)
+};
+
 struct Round {
   std::vector<Candidate> candidates;
+  std::vector<ContenderFit> fits;  // empty when at most one candidate was significant
   std::vector<std::vector<std::string>> groups;  // effects the design cannot tell apart (size > 1 only)
   std::vector<std::string> rivals;  // visible candidates whose score is within chi2_1(1 - alpha) of the best:
-                                    // a 95 % confidence set of "which effect"; these data cannot rank them
-  std::string best;              // best-scoring visible candidate ("" if none)
+                                    // a 95 % confidence set of "which effect"; these data cannot rank them.
+                                    // With contenders fitted: those whose fitted BIC is within chi2_1(1 - alpha)
+                                    // of the winner's, and the score's rivals that were not fitted
+  std::string best;              // best-scoring visible candidate ("" if none); with contenders fitted, the
+                                 // lowest fitted BIC (the one tried)
   std::string decision;          // what the round concluded, one sentence
 };
 

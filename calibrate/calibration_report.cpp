@@ -105,8 +105,13 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
     const Round& rd = r.rounds[i];
     std::string groups;
     for (const auto& g : rd.groups) groups += (groups.empty() ? "" : ", ") + json_list(g);
-    o << fmt::format("{}\n    {{\"best\": {}, \"decision\": {}, \"groups\": [{}], \"rivals\": {}, \"candidates\": [",
-                     i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals));
+    std::string fits;
+    for (const ContenderFit& f : rd.fits)
+      fits += fmt::format(R"({}{{"effect": {}, "value": {}, "bic": {}}})", fits.empty() ? "" : ", ", json_string(f.effect),
+                          json_number(f.value), json_number(f.bic));
+    o << fmt::format("{}\n    {{\"best\": {}, \"decision\": {}, \"groups\": [{}], \"rivals\": {}, \"fits\": [{}], "
+                     "\"candidates\": [",
+                     i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals), fits);
     for (std::size_t c = 0; c < rd.candidates.size(); ++c) {
       const Candidate& k = rd.candidates[c];
       o << fmt::format(R"({}{{"effect": {}, "step": {}, "other_step": {}, "other_visibility_p": {}, "visible": {}, "visibility_p": {}, "signature_chi2": {}, "signature_points": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "left_by_fit": {}, "group": {}}})",
@@ -247,8 +252,17 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                        c.visible ? fmt::format("{:.4g} ± {:.2g}", c.neutral + c.score.estimate, c.score.se) : "",
                        c.group >= 0 ? std::to_string(c.group) : "");
     for (const auto& g : rd.groups) o << fmt::format("\nIndistinguishable in this design (|cos| > 0.9): {}.\n", fmt::join(g, ", "));
+    if (!rd.fits.empty()) {
+      o << "\nSignificant candidates fitted in full, each on its measured response with the free parameters (the "
+           "score ranks them by a linear view at the round's start; the lowest BIC is the one tried):\n\n"
+           "| effect | fitted size | BIC |\n|---|---|---|\n";
+      for (const ContenderFit& f : rd.fits) o << fmt::format("| {} | {:.4g} | {:.1f} |\n", f.effect, f.value, f.bic);
+    }
     if (rd.rivals.size() > 1)
-      o << fmt::format("\nThese data cannot rank them below the best (score within chi2_1(0.95) = 3.84 of {}): {}.\n",
+      o << fmt::format(fmt::runtime(rd.fits.empty() ? "\nThese data cannot rank them below the best (score within chi2_1(0.95) = "
+                                         "3.84 of {}): {}.\n"
+                                       : "\nThese data cannot rank them below the one tried ({}; fitted BIC within "
+                                         "chi2_1(0.95) = 3.84, or score within 3.84 and not fitted): {}.\n"),
                        rd.best, fmt::join(rd.rivals, ", "));
     o << fmt::format("\nDecision: {}.\n", rd.decision);
   }

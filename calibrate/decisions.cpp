@@ -1,7 +1,10 @@
 #include "calibrate/decisions.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <string>
+#include <vector>
 
 namespace gapflow {
 
@@ -28,6 +31,25 @@ Keep keep_verdict(const KeepEvidence& e, double decisive_bic) {
   const bool held_better = e.held_out_n == 0 || e.held_after < e.held_before ||
                            (decisive(e, decisive_bic) && e.held_after - e.held_before <= std::sqrt(2.0 * e.held_out_n));
   return held_better ? Keep::keep : Keep::held_out_worse;
+}
+
+std::vector<int> contenders(const std::vector<double>& score, const std::vector<double>& p_adjusted, double alpha,
+                            int max) {
+  std::vector<int> out;
+  for (std::size_t i = 0; i < score.size(); ++i)
+    if (p_adjusted[i] < alpha) out.push_back(static_cast<int>(i));
+  std::stable_sort(out.begin(), out.end(), [&](int a, int b) { return score[a] > score[b]; });
+  if (static_cast<int>(out.size()) > max) out.resize(static_cast<std::size_t>(std::max(0, max)));
+  return out;
+}
+
+FitChoice choose_by_fit(const std::vector<double>& bic, double delta) {
+  FitChoice c;
+  if (bic.empty()) return c;
+  c.winner = static_cast<int>(std::min_element(bic.begin(), bic.end()) - bic.begin());
+  for (std::size_t i = 0; i < bic.size(); ++i)
+    if (bic[i] - bic[static_cast<std::size_t>(c.winner)] < delta) c.rivals.push_back(static_cast<int>(i));
+  return c;
 }
 
 bool held_out_beyond_noise(const VerdictEvidence& e) {

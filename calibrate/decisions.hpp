@@ -26,9 +26,20 @@
 //    Two tests at level alpha: "unexplained" on a correct model at a rate <= 2 alpha
 //    as far as the linearisation holds and the points are independent (the observables
 //    of one design point share runs; the loop's chi^2 neglects that everywhere).
+// 4. Which effect to try. The score ranks the candidates by their signatures, linear at
+//    the state the round starts from; where the effect is large or the fitted parameters
+//    sit far from the truth, the linear ranking can name the wrong one (blind pass 10's
+//    rolling-high: the friction fitted 0.45 for a true 0.33, linear drag scored 35.6 and
+//    the planted rolling resistance 29.6, and the drag was added). Every candidate that is
+//    significant on its own (adjusted p < alpha), at most `max` of them, best scores first,
+//    is fitted in full on its measured response, and the lowest BIC is the one tried (same
+//    number of parameters: the lowest deviance, a likelihood comparison of the fitted
+//    alternatives). Only WHICH effect is tried changes, never WHETHER: a round tries an
+//    effect exactly when it did before (rule 1), and the chosen one meets rule 2.
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace gapflow {
 
@@ -60,6 +71,20 @@ enum class Keep {
 // A BIC drop this large (Bayes factor ~ e^(drop/2)) is decisive evidence.
 bool decisive(const KeepEvidence& e, double decisive_bic);
 Keep keep_verdict(const KeepEvidence& e, double decisive_bic);
+
+// Rule 4's contenders: indices of the candidates with p_adjusted < alpha, highest score first,
+// at most `max` (ties keep their order). `score` and `p_adjusted` are parallel.
+std::vector<int> contenders(const std::vector<double>& score, const std::vector<double>& p_adjusted, double alpha,
+                            int max);
+
+// Rule 4's choice among the contenders' full fits: the lowest BIC wins (the first of equal
+// ones); its rivals are those within `delta` of it (itself included), the fits these data
+// cannot rank below it at that level (delta = chi2_1(1 - alpha), as for the scores' rivals).
+struct FitChoice {
+  int winner = -1;
+  std::vector<int> rivals;
+};
+FitChoice choose_by_fit(const std::vector<double>& bic, double delta);
 
 struct VerdictEvidence {
   bool attribution_allowed = true;  // false with --max-effects 0 (a fit and its errors only)

@@ -9,8 +9,14 @@
 //   responses: an effect about to be added, measured at more sizes across its
 //     range, so that its size is fitted on its measured response.
 //
-// The reference: the nodes, with the effects already added set to their fitted
-// values. Effects need not add up: a rolling resistance may slow spheres on a board
+// The reference: the surface's nodes nearest the fit, with the effects already added
+// set to their fitted values. An effect's response depends on the free parameters it is
+// measured at (a rolling resistance slows a flow of rough spheres differently from one of
+// smooth ones), and the surface adds it unchanged wherever they go; so where an effect's
+// joint fit moves them to other nodes, its response is measured again there and the fit
+// repeated (calibration.cpp, fit_trial). Blind pass 10's rolling-high: the baseline put the
+// friction at 0.45 (nodes 0.40-0.50) for a true 0.33; every candidate's fit moved it to
+// about 0.35. Effects need not add up: a rolling resistance may slow spheres on a board
 // tilted sideways by 5 deg differently from one that is not. Our reading of blind
 // pass 6's two-tilt-rolling (not measured apart): with a tilt added, a planted
 // rolling resistance measured on the untilted nodes cut BIC by 30 and raised the
@@ -58,7 +64,8 @@ class EffectResponses {
 
   // The baseline's nodes as a reference (their runs are made).
   static Reference baseline_reference(const BaselineFit& base) { return {base.nodes, base.node_predictions}; }
-  // The baseline's nodes with the added effects at their fitted values: one batch of runs.
+  // The (up to) three surface nodes nearest `fitted`'s free parameters, with the added effects at
+  // their values in `fitted`: one batch of runs (none new for baseline nodes without effects).
   Reference reference_with(const BaselineFit& base, const ParameterSet& fitted, const std::vector<EffectTerm>& effects);
 
   // Every applicable catalogue effect moved by its physical step at the reference (all in one

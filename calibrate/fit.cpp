@@ -411,6 +411,23 @@ std::vector<double> grid_levels(const FreeParameter& f, bool alone, int grid_max
   return out;
 }
 
+std::vector<std::size_t> nearest_nodes(const std::vector<ParameterSet>& nodes, const Surface& s, const ParameterSet& at,
+                                       std::size_t count) {
+  std::vector<std::size_t> order(nodes.size());
+  std::iota(order.begin(), order.end(), 0);
+  auto distance = [&](const ParameterSet& n) {
+    double d = 0;
+    for (std::size_t k = 0; k < s.keys.size(); ++k) {
+      const double z = (n.get(s.keys[k], 0) - at.get(s.keys[k], 0)) / s.half[k];
+      d += z * z;
+    }
+    return d;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return distance(nodes[a]) < distance(nodes[b]); });
+  order.resize(std::min(count, order.size()));
+  return order;
+}
+
 BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const Say& say) {
   BaselineFit out;
   // The grid.
@@ -443,19 +460,9 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   out.surface = data.free.empty() ? build_surface(data, {ParameterSet{}}, {preds.front()}) : build_surface(data, nodes, node_preds);
   out.params = fit_surface(data, out.surface, grid[best]);
   // Signatures are taken at the (up to) three nodes nearest the fit.
-  std::vector<std::size_t> order(nodes.size());
-  std::iota(order.begin(), order.end(), 0);
-  auto distance = [&](const ParameterSet& n) {
-    double d = 0;
-    for (std::size_t k = 0; k < out.surface.keys.size(); ++k) {
-      const double z = (n.get(out.surface.keys[k], 0) - out.params.get(out.surface.keys[k], 0)) / out.surface.half[k];
-      d += z * z;
-    }
-    return d;
-  };
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return distance(nodes[a]) < distance(nodes[b]); });
-  for (std::size_t k = 0; k < std::min<std::size_t>(3, order.size()); ++k)
-    out.nodes.push_back(nodes[order[k]]), out.node_predictions.push_back(node_preds[order[k]]);
+  for (std::size_t k : nearest_nodes(nodes, out.surface, out.params))
+    out.nodes.push_back(nodes[k]), out.node_predictions.push_back(node_preds[k]);
+  out.surface_nodes = nodes;
   for (const FreeParameter& f : data.free)
     if (f.has_measurement())
       say(fmt::format("  {} measured {:.4g} +- {:.4g}: a datum of every fit", f.key, f.measured, f.measured_se));

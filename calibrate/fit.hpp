@@ -104,7 +104,13 @@ struct BaselineFit {
   ParameterSet params;                // fitted free parameters
   std::vector<ParameterSet> nodes;    // grid nodes next to the fit (signatures are taken there)
   std::vector<Prediction> node_predictions;
+  std::vector<ParameterSet> surface_nodes;  // every node the surface goes through (responses are measured at
+                                            // the ones nearest a later fit: EffectResponses::reference_near)
 };
+
+// The (up to) `count` of `nodes` nearest `at` in the surface's scaled free parameters, nearest first.
+std::vector<std::size_t> nearest_nodes(const std::vector<ParameterSet>& nodes, const Surface& s, const ParameterSet& at,
+                                       std::size_t count = 3);
 
 // The baseline grid's values of one free parameter: alone, its step from lo (at most
 // grid_max levels, spread evenly if more would be needed); with others, lo, mid, hi.

@@ -176,6 +176,35 @@ TEST(KeepDecision, DecisiveEvidenceToleratesAHeldOutRiseWithinItsNoise) {
             Keep::keep);
 }
 
+TEST(WhichEffectToTry, TheContendersAreTheSignificantCandidatesBestScoresFirstAtMostMax) {
+  // Blind pass 10, rolling-high, round 1 (visible candidates in the report's order): rolling
+  // resistance, spinning friction, wall friction, size scatter, restitution, lateral tilt, gap
+  // offset, linear drag, corner rounding, rolling contact.
+  const std::vector<double> score{29.64, 1.87, 13.65, 1.35, 2.37, 0.23, 1.26, 35.55, 0.01, 25.05};
+  const std::vector<double> p_adjusted{5.21e-7, 1, 0.0022, 1, 1, 1, 1, 2.48e-8, 1, 5.6e-6};
+  EXPECT_EQ(contenders(score, p_adjusted, 0.05, 3), (std::vector<int>{7, 0, 9}));
+  EXPECT_EQ(contenders(score, p_adjusted, 0.05, 10), (std::vector<int>{7, 0, 9, 2}));
+  // One significant candidate: one contender (the round then fits it alone, as before rule 4).
+  EXPECT_EQ(contenders(score, p_adjusted, 1e-7, 3), (std::vector<int>{7}));
+  // None significant, or max 0: none. p_adjusted = alpha is not significant.
+  EXPECT_TRUE(contenders(score, p_adjusted, 1e-9, 3).empty());
+  EXPECT_TRUE(contenders(score, p_adjusted, 0.05, 0).empty());
+  EXPECT_EQ(contenders({5, 6}, {0.05, 0.01}, 0.05, 3), (std::vector<int>{1}));
+}
+
+TEST(WhichEffectToTry, TheLowestFittedBicIsTriedNotTheBestScore) {
+  // Contenders in score order; the second fits best. Rivals: within delta of the winner, itself included.
+  const FitChoice c = choose_by_fit({-239.8, -245.1, -242.0}, 3.84);
+  EXPECT_EQ(c.winner, 1);
+  EXPECT_EQ(c.rivals, (std::vector<int>{1, 2}));
+  // Equal BICs: the first (the better score) wins; a difference of exactly delta is not a rival.
+  const FitChoice tie = choose_by_fit({-10.0, -10.0, -6.16}, 3.84);
+  EXPECT_EQ(tie.winner, 0);
+  EXPECT_EQ(tie.rivals, (std::vector<int>{0, 1}));
+  EXPECT_EQ(choose_by_fit({-10.0, -6.0}, 4.0).rivals, (std::vector<int>{0}));
+  EXPECT_EQ(choose_by_fit({}, 3.84).winner, -1);
+}
+
 TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFittedValues) {
   const std::vector<ParameterSet> nodes{ParameterSet{}.with("particles.friction_particle", 0.3),
                                         ParameterSet{}.with("particles.friction_particle", 0.35)};
@@ -194,6 +223,21 @@ TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFit
     EXPECT_DOUBLE_EQ(at[n].get("particles.friction_particle", 0), nodes[n].get("particles.friction_particle", 0));
   }
   EXPECT_EQ(nodes_with_effects(nodes, fitted, {})[1].label(), nodes[1].label());
+}
+
+TEST(EffectResponses, AResponseIsMeasuredAtTheSurfaceNodesNearestTheFit) {
+  // Blind pass 10's rolling-high: surface nodes 0.30-0.50, the baseline fit 0.450 (signatures at
+  // 0.45, 0.50, 0.40); every candidate's joint fit moved the friction to about 0.35.
+  std::vector<ParameterSet> nodes;
+  for (double f : {0.30, 0.35, 0.40, 0.45, 0.50}) nodes.push_back(ParameterSet{}.with("particles.friction_particle", f));
+  Surface s;
+  s.keys = {"particles.friction_particle"}, s.centre = {0.40}, s.half = {0.10};
+  const ParameterSet baseline = ParameterSet{}.with("particles.friction_particle", 0.4502);
+  EXPECT_EQ(nearest_nodes(nodes, s, baseline), (std::vector<std::size_t>{3, 4, 2}));  // 0.0498 from 0.50
+  const ParameterSet moved = ParameterSet{}.with("particles.friction_particle", 0.345).with("particles.drag_per_s", 1.4);
+  EXPECT_EQ(nearest_nodes(nodes, s, moved), (std::vector<std::size_t>{1, 0, 2}));  // effect keys play no part
+  EXPECT_EQ(nearest_nodes(nodes, s, moved, 1), (std::vector<std::size_t>{1}));
+  EXPECT_EQ(nearest_nodes(nodes, s, moved, 9).size(), 5u);
 }
 
 // The round table of report.md and summary.json's candidates carry the "left by the fit" share:
