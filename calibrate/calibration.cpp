@@ -376,13 +376,15 @@ class Loop {
     if (picks.size() < 2) return fit_trial(*find(round, round.best), terms, ref, surface, state);
     std::vector<Trial> trials;
     std::vector<double> bic;
+    std::vector<bool> eligible;
     for (int m : picks) {
       const Candidate& c = *visible[static_cast<std::size_t>(m)];
       trials.push_back(fit_trial(c, terms, ref, surface, state));
       bic.push_back(trials.back().after.bic);
-      round.fits.push_back({c.effect, trials.back().fit.params.get(c.key, c.neutral), bic.back()});
+      eligible.push_back(!at_neutral(trials.back(), c));
+      round.fits.push_back({c.effect, trials.back().fit.params.get(c.key, c.neutral), bic.back(), !eligible.back()});
     }
-    const FitChoice choice = choose_by_fit(bic, chi_square_quantile(1 - def_.alpha, 1));
+    const FitChoice choice = choose_by_fit(bic, eligible, chi_square_quantile(1 - def_.alpha, 1));
     std::vector<std::string> rivals;
     for (int r : choice.rivals) rivals.push_back(round.fits[static_cast<std::size_t>(r)].effect);
     for (const std::string& name : round.rivals)  // the score's rivals the fits did not reach
@@ -391,9 +393,11 @@ class Loop {
     round.rivals = rivals;
     round.best = round.fits[static_cast<std::size_t>(choice.winner)].effect;
     std::vector<std::string> listed;
-    for (const ContenderFit& f : round.fits) listed.push_back(fmt::format("{} {:.4g} (BIC {:.1f})", f.effect, f.value, f.bic));
-    say(fmt::format("{} significant candidates fitted in full: {}; tried: {}", picks.size(), fmt::join(listed, ", "),
-                    round.best));
+    for (const ContenderFit& f : round.fits)
+      listed.push_back(fmt::format("{} {:.4g} (BIC {:.1f}{})", f.effect, f.value, f.bic, f.at_neutral ? ", at neutral" : ""));
+    const auto significant = std::count_if(p_adjusted.begin(), p_adjusted.end(), [&](double p) { return p < def_.alpha; });
+    say(fmt::format("{} candidates significant, {} fitted in full: {}; tried: {}", significant, picks.size(),
+                    fmt::join(listed, ", "), round.best));
     return std::move(trials[static_cast<std::size_t>(choice.winner)]);
   }
 
@@ -436,6 +440,7 @@ class Loop {
       t.surface.effects.push_back(responses_.measure_term(c, near));
       const ParameterSet first = t.fit.params;
       t.fit = fit_effect(data_, t.surface, first, t.surface.effects.size() - 1, k);
+      if (t.fit.restarted) say(fmt::format("{}: the re-fit restarted from the profile scan's best value", e.name));
       say(fmt::format("{}: re-fitted on the response measured there: {} = {:.4g} (was {:.4g}), {}", e.name, e.key,
                       t.fit.params.get(e.key, c.neutral), first.get(e.key, c.neutral), free_label(t.fit.params)));
     }
@@ -443,20 +448,12 @@ class Loop {
     return t;
   }
 
-  // Whether `ref`'s nodes are the surface nodes nearest `fitted` (in the free parameters).
+  // Whether `fitted` is nearest the same surface node as the point `ref` was measured around
+  // (its nodes are that node's nearest neighbours). The nearest node, not the set of three: with
+  // two or three free parameters the second and third nearest change with every small move.
   bool measured_near(const Reference& ref, const ParameterSet& fitted) const {
-    auto free_values = [&](const ParameterSet& n) {
-      std::vector<double> v;
-      for (const std::string& key : base_->surface.keys) v.push_back(n.get(key, 0));
-      return v;
-    };
-    std::vector<std::vector<double>> want, have;
-    for (std::size_t k : nearest_nodes(base_->surface_nodes, base_->surface, fitted))
-      want.push_back(free_values(base_->surface_nodes[k]));
-    for (const ParameterSet& n : ref.nodes) have.push_back(free_values(n));
-    std::sort(want.begin(), want.end());
-    std::sort(have.begin(), have.end());
-    return want == have;
+    const auto nearest = [&](const ParameterSet& p) { return nearest_nodes(base_->surface_nodes, base_->surface, p, 1); };
+    return nearest(fitted) == nearest(ref.anchor);
   }
 
   std::string free_label(const ParameterSet& p) const {
@@ -465,18 +462,21 @@ class Loop {
     return fmt::format("{}", fmt::join(parts, ", "));
   }
 
+  // At its neutral value (within 1e-3 of its range) the effect changes nothing.
+  static bool at_neutral(const Trial& t, const Candidate& c) {
+    const EffectDef& e = *find_effect(c.effect);
+    return std::abs(t.fit.params.get(e.key, c.neutral) - c.neutral) <= 1e-3 * (e.hi - e.lo);
+  }
+
   // The keep test of a fitted trial against the state `against`: t.evidence, t.verdict.
   void judge(Trial& t, const Candidate& c, const ModelState& against) {
-    const EffectDef& e = *find_effect(c.effect);
     // The held-out test by direct simulation, not on the surface: both parameter sets run
     // on seeds of their own (common to both, so that their difference is not the packing;
     // not the final re-score's, which must not have decided anything).
     // On the surface a held-out point's prediction carries the finite-difference noise of
     // the effect's measured response there, which can outweigh its data's error.
     const HeldOutCheck held = held_out_check(data_, def_, ev_, against.params, t.fit.params);
-    // At its neutral value (within 1e-3 of its range) the effect changes nothing.
-    const bool at_neutral = std::abs(t.fit.params.get(e.key, c.neutral) - c.neutral) <= 1e-3 * (e.hi - e.lo);
-    t.evidence = {against.bic, t.after.bic, held.n, held.before, held.after, at_neutral};
+    t.evidence = {against.bic, t.after.bic, held.n, held.before, held.after, at_neutral(t, c)};
     t.verdict = keep_verdict(t.evidence, def_.decisive_bic);
   }
 
@@ -564,7 +564,7 @@ class Loop {
   }
 
   static std::string rejected_text(const Candidate& c, const Trial& t) {
-    return fmt::format("best candidate {} (adjusted p = {:.3g}) rejected{}: BIC {:.1f} -> {:.1f}, held-out chi2 "
+    return fmt::format("candidate {} (adjusted p = {:.3g}) rejected{}: BIC {:.1f} -> {:.1f}, held-out chi2 "
                        "(keep-test seeds) {:.1f} -> {:.1f}",
                        c.effect, c.p_adjusted, t.verdict == Keep::at_neutral ? " (fitted at its neutral value)" : "",
                        t.evidence.bic_before, t.evidence.bic_after, t.evidence.held_before, t.evidence.held_after);

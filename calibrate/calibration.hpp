@@ -105,6 +105,7 @@ struct ContenderFit {
   std::string effect;
   double value = 0;  // fitted size (key units)
   double bic = 0;    // of the state with it (same number of parameters for every contender)
+  bool at_neutral = false;  // fitted at its neutral value: not eligible (decisions.hpp, choose_by_fit)
 };
 
 struct Round {

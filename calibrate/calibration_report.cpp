@@ -107,8 +107,8 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
     for (const auto& g : rd.groups) groups += (groups.empty() ? "" : ", ") + json_list(g);
     std::string fits;
     for (const ContenderFit& f : rd.fits)
-      fits += fmt::format(R"({}{{"effect": {}, "value": {}, "bic": {}}})", fits.empty() ? "" : ", ", json_string(f.effect),
-                          json_number(f.value), json_number(f.bic));
+      fits += fmt::format(R"({}{{"effect": {}, "value": {}, "bic": {}, "at_neutral": {}}})", fits.empty() ? "" : ", ",
+                          json_string(f.effect), json_number(f.value), json_number(f.bic), f.at_neutral ? "true" : "false");
     o << fmt::format("{}\n    {{\"best\": {}, \"decision\": {}, \"groups\": [{}], \"rivals\": {}, \"fits\": [{}], "
                      "\"candidates\": [",
                      i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals), fits);
@@ -254,9 +254,10 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
     for (const auto& g : rd.groups) o << fmt::format("\nIndistinguishable in this design (|cos| > 0.9): {}.\n", fmt::join(g, ", "));
     if (!rd.fits.empty()) {
       o << "\nSignificant candidates fitted in full, each on its measured response with the free parameters (the "
-           "score ranks them by a linear view at the round's start; the lowest BIC is the one tried):\n\n"
-           "| effect | fitted size | BIC |\n|---|---|---|\n";
-      for (const ContenderFit& f : rd.fits) o << fmt::format("| {} | {:.4g} | {:.1f} |\n", f.effect, f.value, f.bic);
+           "score ranks them by a linear view at the round's start; the lowest BIC is the one tried, a fit at its "
+           "effect's neutral value never):\n\n| effect | fitted size | BIC | at neutral |\n|---|---|---|---|\n";
+      for (const ContenderFit& f : rd.fits)
+        o << fmt::format("| {} | {:.4g} | {:.1f} | {} |\n", f.effect, f.value, f.bic, f.at_neutral ? "yes" : "");
     }
     if (rd.rivals.size() > 1)
       o << fmt::format(fmt::runtime(rd.fits.empty() ? "\nThese data cannot rank them below the best (score within chi2_1(0.95) = "

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <string>
 #include <vector>
 
@@ -43,12 +42,17 @@ std::vector<int> contenders(const std::vector<double>& score, const std::vector<
   return out;
 }
 
-FitChoice choose_by_fit(const std::vector<double>& bic, double delta) {
+FitChoice choose_by_fit(const std::vector<double>& bic, const std::vector<bool>& eligible, double delta) {
   FitChoice c;
-  if (bic.empty()) return c;
-  c.winner = static_cast<int>(std::min_element(bic.begin(), bic.end()) - bic.begin());
+  const bool any = std::find(eligible.begin(), eligible.end(), true) != eligible.end();
+  for (std::size_t i = 0; i < bic.size(); ++i) {
+    if (any && !eligible[i]) continue;
+    if (c.winner < 0 || bic[i] < bic[static_cast<std::size_t>(c.winner)]) c.winner = static_cast<int>(i);
+  }
+  if (c.winner < 0) return c;
+  if (!any) return c.rivals = {c.winner}, c;
   for (std::size_t i = 0; i < bic.size(); ++i)
-    if (bic[i] - bic[static_cast<std::size_t>(c.winner)] < delta) c.rivals.push_back(static_cast<int>(i));
+    if (eligible[i] && bic[i] - bic[static_cast<std::size_t>(c.winner)] < delta) c.rivals.push_back(static_cast<int>(i));
   return c;
 }
 

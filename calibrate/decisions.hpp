@@ -77,14 +77,17 @@ Keep keep_verdict(const KeepEvidence& e, double decisive_bic);
 std::vector<int> contenders(const std::vector<double>& score, const std::vector<double>& p_adjusted, double alpha,
                             int max);
 
-// Rule 4's choice among the contenders' full fits: the lowest BIC wins (the first of equal
-// ones); its rivals are those within `delta` of it (itself included), the fits these data
-// cannot rank below it at that level (delta = chi2_1(1 - alpha), as for the scores' rivals).
+// Rule 4's choice among the contenders' full fits: the lowest BIC among the eligible ones wins
+// (the first of equal ones); its rivals are the eligible ones within `delta` of it (itself
+// included), the fits these data cannot rank below it at that level (delta = chi2_1(1 - alpha),
+// as for the scores' rivals). A fit at its effect's neutral value is not eligible: rule 2 never
+// keeps it, and its BIC gain is the free parameters' (blind pass 10's drag-high). With none
+// eligible, the lowest BIC overall (rule 2 then rejects it) and no rivals but itself.
 struct FitChoice {
   int winner = -1;
   std::vector<int> rivals;
 };
-FitChoice choose_by_fit(const std::vector<double>& bic, double delta);
+FitChoice choose_by_fit(const std::vector<double>& bic, const std::vector<bool>& eligible, double delta);
 
 struct VerdictEvidence {
   bool attribution_allowed = true;  // false with --max-effects 0 (a fit and its errors only)

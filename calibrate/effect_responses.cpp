@@ -76,6 +76,7 @@ Reference EffectResponses::reference_with(const BaselineFit& base, const Paramet
   std::vector<ParameterSet> near;
   for (std::size_t k : nearest_nodes(base.surface_nodes, base.surface, fitted)) near.push_back(base.surface_nodes[k]);
   r.nodes = nodes_with_effects(near, fitted, effects);
+  r.anchor = fitted;
   std::vector<std::string> at;
   for (const ParameterSet& n : near) at.push_back(n.label());
   for (const EffectTerm& t : effects) at.push_back(fmt::format("{} = {:.4g}", t.key, fitted.get(t.key, t.neutral)));

@@ -22,7 +22,7 @@
 // rolling resistance measured on the untilted nodes cut BIC by 30 and raised the
 // held-out chi^2 from 48 to 168. The first round's reference is the baseline's own
 // nodes (no runs); a later round's costs one more batch of the nodes' runs, and
-// only the candidate about to be added is measured there: which candidate that is
+// only the candidates about to be fitted are measured there: which ones those are
 // is still decided on the signatures measured at the baseline (re-measuring all ten
 // would cost a second signature batch, ~2000 runs).
 // A later round's term has the step and the refinement sizes, not the range's-end
@@ -44,6 +44,7 @@ struct EffectDef;
 struct Reference {
   std::vector<ParameterSet> nodes;
   std::vector<Prediction> predictions;  // one per node: the partners of the moved runs
+  ParameterSet anchor;                  // the fitted point the nodes were chosen around
 };
 
 // The baseline's nodes with the effects' keys set to their values in `effects_at` (an effect
@@ -63,7 +64,7 @@ class EffectResponses {
       : data_(data), def_(def), ev_(ev), say_(std::move(say)) {}
 
   // The baseline's nodes as a reference (their runs are made).
-  static Reference baseline_reference(const BaselineFit& base) { return {base.nodes, base.node_predictions}; }
+  static Reference baseline_reference(const BaselineFit& base) { return {base.nodes, base.node_predictions, base.params}; }
   // The (up to) three surface nodes nearest `fitted`'s free parameters, with the added effects at
   // their values in `fitted`: one batch of runs (none new for baseline nodes without effects).
   Reference reference_with(const BaselineFit& base, const ParameterSet& fitted, const std::vector<EffectTerm>& effects);

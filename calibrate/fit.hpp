@@ -105,7 +105,7 @@ struct BaselineFit {
   std::vector<ParameterSet> nodes;    // grid nodes next to the fit (signatures are taken there)
   std::vector<Prediction> node_predictions;
   std::vector<ParameterSet> surface_nodes;  // every node the surface goes through (responses are measured at
-                                            // the ones nearest a later fit: EffectResponses::reference_near)
+                                            // the ones nearest a later fit: EffectResponses::reference_with)
 };
 
 // The (up to) `count` of `nodes` nearest `at` in the surface's scaled free parameters, nearest first.

@@ -194,15 +194,28 @@ TEST(WhichEffectToTry, TheContendersAreTheSignificantCandidatesBestScoresFirstAt
 
 TEST(WhichEffectToTry, TheLowestFittedBicIsTriedNotTheBestScore) {
   // Contenders in score order; the second fits best. Rivals: within delta of the winner, itself included.
-  const FitChoice c = choose_by_fit({-239.8, -245.1, -242.0}, 3.84);
+  const std::vector<bool> all(3, true);
+  const FitChoice c = choose_by_fit({-239.8, -245.1, -242.0}, all, 3.84);
   EXPECT_EQ(c.winner, 1);
   EXPECT_EQ(c.rivals, (std::vector<int>{1, 2}));
   // Equal BICs: the first (the better score) wins; a difference of exactly delta is not a rival.
-  const FitChoice tie = choose_by_fit({-10.0, -10.0, -6.16}, 3.84);
+  const FitChoice tie = choose_by_fit({-10.0, -10.0, -6.0}, all, 4.0);
   EXPECT_EQ(tie.winner, 0);
   EXPECT_EQ(tie.rivals, (std::vector<int>{0, 1}));
-  EXPECT_EQ(choose_by_fit({-10.0, -6.0}, 4.0).rivals, (std::vector<int>{0}));
-  EXPECT_EQ(choose_by_fit({}, 3.84).winner, -1);
+  EXPECT_TRUE(choose_by_fit({}, {}, 3.84).rivals.empty());
+  EXPECT_EQ(choose_by_fit({}, {}, 3.84).winner, -1);
+}
+
+TEST(WhichEffectToTry, AFitAtItsNeutralValueIsNeverTheOneTriedNorARival) {
+  // Blind pass 10's drag-high pattern: a contender fitted at its neutral size gains BIC through the
+  // free parameters alone. It must not win over a real fit, nor stand beside it as a rival.
+  const FitChoice c = choose_by_fit({-221.8, -215.0, -213.0}, {false, true, true}, 3.84);
+  EXPECT_EQ(c.winner, 1);
+  EXPECT_EQ(c.rivals, (std::vector<int>{1, 2}));
+  // All at neutral: the lowest BIC is named (the keep test then rejects it), alone.
+  const FitChoice none = choose_by_fit({-5.0, -9.0}, {false, false}, 3.84);
+  EXPECT_EQ(none.winner, 1);
+  EXPECT_EQ(none.rivals, (std::vector<int>{1}));
 }
 
 TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFittedValues) {
