@@ -64,6 +64,18 @@ def said(summary):
     return label, added
 
 
+def contests(summary):
+    """Rounds whose significant candidates were fitted in full (decisions.hpp rule 4, from dc3e474 on):
+    (the best score's effect, the effect tried) per such round."""
+    out = []
+    for rd in summary.get("rounds", []):
+        if not rd.get("fits"):
+            continue
+        visible = [c for c in rd["candidates"] if c["visible"]]
+        out.append((max(visible, key=lambda c: c["score"])["effect"], rd["best"]))
+    return out
+
+
 VISIBLE_POWER = 0.8  # oracle power above which a planted effect counts as visible in its data
 
 
@@ -112,6 +124,7 @@ def main(out):
             "free_offset": [a["params"].get(p["key"], float("nan")) - p["value"] for p in truth["planted"]
                             if p["name"] == "free"],
             "said": verdict,
+            "contests": "; ".join(f"{top}->{tried}" for top, tried in contests(summary)),
             "verdict": summary["verdict"],
             "added": "; ".join(f"{x['key']}={x['value']:.4g} [{x['lo95']:.4g}, {x['hi95']:.4g}]" for x in added),
             "identified": all(found) if planted and label not in ("outside the catalogue", "3D model") else "",
@@ -264,6 +277,15 @@ def main(out):
             f"{', '.join(missed_unseen) or 'none'}",
             f"* planted effects the oracle could not see (power < {VISIBLE_POWER}) although above that best-case bound "
             f"(the bound is linear and misses absorption by the fit): {', '.join(hidden_above) or 'none'}",
+        ]
+    contested = [r for r in rows if r["contests"]]
+    if contested:
+        changed = [f"{r['case']} ({r['truth']}): {c}" for r in contested for c in r["contests"].split("; ")
+                   if c.split("->")[0] != c.split("->")[1]]
+        lines += [
+            f"* rounds whose significant candidates were fitted in full (the lowest BIC tried, not the best score): "
+            f"{sum(len(r['contests'].split('; ')) for r in contested)} in {len(contested)} twins; the one tried was not the "
+            f"best score in {len(changed)}: {', '.join(changed) or 'none'}",
         ]
     if flagged_known:
         lines += [
