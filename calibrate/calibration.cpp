@@ -448,12 +448,9 @@ class Loop {
     return t;
   }
 
-  // Whether `fitted` is nearest the same surface node as the point `ref` was measured around
-  // (its nodes are that node's nearest neighbours). The nearest node, not the set of three: with
-  // two or three free parameters the second and third nearest change with every small move.
+  // Whether `fitted` is nearest the same surface node as the point `ref` was measured around.
   bool measured_near(const Reference& ref, const ParameterSet& fitted) const {
-    const auto nearest = [&](const ParameterSet& p) { return nearest_nodes(base_->surface_nodes, base_->surface, p, 1); };
-    return nearest(fitted) == nearest(ref.anchor);
+    return nearest_same_node(base_->surface_nodes, base_->surface, fitted, ref.anchor);
   }
 
   std::string free_label(const ParameterSet& p) const {

@@ -428,6 +428,11 @@ std::vector<std::size_t> nearest_nodes(const std::vector<ParameterSet>& nodes, c
   return order;
 }
 
+bool nearest_same_node(const std::vector<ParameterSet>& nodes, const Surface& s, const ParameterSet& a,
+                       const ParameterSet& b) {
+  return nearest_nodes(nodes, s, a, 1) == nearest_nodes(nodes, s, b, 1);
+}
+
 BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const Say& say) {
   BaselineFit out;
   // The grid.

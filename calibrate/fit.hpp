@@ -111,6 +111,11 @@ struct BaselineFit {
 // The (up to) `count` of `nodes` nearest `at` in the surface's scaled free parameters, nearest first.
 std::vector<std::size_t> nearest_nodes(const std::vector<ParameterSet>& nodes, const Surface& s, const ParameterSet& at,
                                        std::size_t count = 3);
+// Whether `a` and `b` are nearest the same node. An effect's response measured around `a` is
+// measured again for a fit at `b` when they are not (not when the second or third nearest
+// changes: with two or three free parameters those change with every small move).
+bool nearest_same_node(const std::vector<ParameterSet>& nodes, const Surface& s, const ParameterSet& a,
+                       const ParameterSet& b);
 
 // The baseline grid's values of one free parameter: alone, its step from lo (at most
 // grid_max levels, spread evenly if more would be needed); with others, lo, mid, hi.

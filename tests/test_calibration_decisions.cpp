@@ -251,6 +251,27 @@ TEST(EffectResponses, AResponseIsMeasuredAtTheSurfaceNodesNearestTheFit) {
   EXPECT_EQ(nearest_nodes(nodes, s, moved), (std::vector<std::size_t>{1, 0, 2}));  // effect keys play no part
   EXPECT_EQ(nearest_nodes(nodes, s, moved, 1), (std::vector<std::size_t>{1}));
   EXPECT_EQ(nearest_nodes(nodes, s, moved, 9).size(), 5u);
+  // Measured again only when the nearest node changes: 0.4502 and 0.43 are both nearest 0.45
+  // (the second nearest changes, 0.50 -> 0.40), 0.42 is nearest 0.40.
+  const auto at = [](double f) { return ParameterSet{}.with("particles.friction_particle", f); };
+  EXPECT_TRUE(nearest_same_node(nodes, s, baseline, at(0.43)));
+  EXPECT_FALSE(nearest_same_node(nodes, s, baseline, at(0.42)));
+}
+
+TEST(EffectResponses, WithTwoFreeParametersASmallMoveAroundANodeMeasuresNothingAgain) {
+  // A 3 x 3 grid (the baseline's with two free parameters): around the centre node the second
+  // and third nearest change with the direction of every small move; the nearest does not.
+  std::vector<ParameterSet> nodes;
+  for (double f : {0.2, 0.3, 0.4})
+    for (double w : {0.1, 0.2, 0.3}) nodes.push_back(ParameterSet{}.with("particles.friction_particle", f).with("particles.friction_wall", w));
+  Surface s;
+  s.keys = {"particles.friction_particle", "particles.friction_wall"}, s.centre = {0.3, 0.2}, s.half = {0.1, 0.1};
+  const auto at = [](double f, double w) {
+    return ParameterSet{}.with("particles.friction_particle", f).with("particles.friction_wall", w);
+  };
+  EXPECT_NE(nearest_nodes(nodes, s, at(0.31, 0.205)), nearest_nodes(nodes, s, at(0.295, 0.21)));
+  EXPECT_TRUE(nearest_same_node(nodes, s, at(0.31, 0.205), at(0.295, 0.21)));
+  EXPECT_FALSE(nearest_same_node(nodes, s, at(0.31, 0.205), at(0.36, 0.21)));
 }
 
 // The round table of report.md and summary.json's candidates carry the "left by the fit" share:
