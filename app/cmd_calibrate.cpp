@@ -23,6 +23,7 @@ struct CalibrateCommands::Options {
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool no_plots = false, mpi = false, check = false;
   int max_effects = 2;
+  int contenders = CalibrationDef{}.contenders;
   // twin
   std::uint64_t seed = 1;
   std::vector<std::string> effects, set;
@@ -62,6 +63,7 @@ int cmd_calibrate(const CalibrateCommands::Options& o) {
   CalibrationDef def;
   def.model = parse_model_kind(o.model);
   def.max_effects = o.max_effects;
+  def.contenders = o.contenders;
   // Under MPI every rank has read and checked the data file; ranks >= 1 only simulate.
   std::unique_ptr<MpiSession> mpi = o.mpi ? std::make_unique<MpiSession>() : nullptr;
   g_cancel.store(false);
@@ -135,6 +137,10 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
   o.calibrate->add_option("--out", o.out, "Output folder (default results/calibration/<data name>/)");
   o.calibrate->add_option("--db", o.db, "Runs store (default <out>/runs.sqlite; calibrations may share one)");
   o.calibrate->add_option("--max-effects", o.max_effects, "Rounds of adding an effect")->check(CLI::Range(0, 4));
+  o.calibrate->add_option("--contenders", o.contenders,
+                          "Significant candidates fitted in full before one is tried, the lowest BIC (1: the best score "
+                          "is tried, as before rule 4)")
+      ->check(CLI::Range(1, 10));
   o.calibrate->add_flag("--no-plots", o.no_plots, "Do not draw the PNG figures");
   o.calibrate->add_flag("--check", o.check, "Read and check the data file (every point's scenario compiled), run nothing");
   o.calibrate->add_flag("--mpi", o.mpi,

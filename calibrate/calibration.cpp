@@ -627,6 +627,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.held_out_beyond_noise = held_out_beyond_noise(evidence);
   out.verdict = final_verdict(evidence);
   out.alpha = def.alpha;
+  out.contenders = def.contenders;
   out.runs_simulated = ev.runs_simulated();
   out.runs_reused = ev.runs_reused();
   out.run_seconds = ev.run_seconds();

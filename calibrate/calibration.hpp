@@ -138,6 +138,7 @@ struct CalibrationResult {
                                    // "unexplained residual" | ... (every string listed there)
   std::string summary;             // one paragraph for people
   double alpha = 0.05;             // the level the loop's tests used (CalibrationDef::alpha)
+  int contenders = 3;              // CalibrationDef::contenders it ran with
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
   // The held-out points after everything (fresh seeds), their chi^2 with the fitted parameters'
   // uncertainty carried to them (attribution.hpp held_out_chi_square): the verdict's test.

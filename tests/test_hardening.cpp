@@ -136,6 +136,10 @@ TEST(Hardening, MessagesBlameTheRightKeyAndSayWhy) {
   expect_bad_input("check " + shell_quoted(source_path("scenarios").string()), "is a directory, not a scenario file");
   expect_bad_input("check /nonexistent/x.toml", "/nonexistent/x.toml: no such file");
   expect_bad_input("study /nonexistent/x.toml", "/nonexistent/x.toml: no such file");
+  // The calibration's rule-4 setting: at least one contender (one = the best score is tried).
+  const std::string design = shell_quoted(source_path("data/examples/tiny_design.toml").string());
+  expect_bad_input("calibrate " + design + " --check --contenders 0", "--contenders: Value 0 not in range 1 to 10");
+  EXPECT_EQ(run_gapflow("calibrate " + design + " --check --contenders 1").code, 0);
 }
 
 // ---------------------------------------------------------------- stores
