@@ -238,7 +238,7 @@ TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFit
   EXPECT_EQ(nodes_with_effects(nodes, fitted, {})[1].label(), nodes[1].label());
 }
 
-TEST(EffectResponses, AResponseIsMeasuredAtTheSurfaceNodesNearestTheFit) {
+TEST(EffectResponses, TheNodesNearestAFitAreRankedByItsFreeParametersAlone) {
   // Blind pass 10's rolling-high: surface nodes 0.30-0.50, the baseline fit 0.450 (signatures at
   // 0.45, 0.50, 0.40); every candidate's joint fit moved the friction to about 0.35.
   std::vector<ParameterSet> nodes;
