@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# A blind pass's calibrations run again, by another binary or with other calibrate options, on a copy
+# of the pass's store: the same twins, the same seeds. Runs the pass made are reused; new parameter
+# values are simulated into the copy (the pass's own store is not written). Writes PASS/DIR/<case>/
+# (each calibration's report and summary.json) and PASS/DIR/report.md, cases.csv by
+# calibrate/blind_summary.py, with a copy of the pass's truth.
+#
+#   GAPFLOW=<binary> studies/calibration_replay.sh PASS DIR [JOBS] [CALIBRATE OPTIONS...]
+#
+# e.g. studies/calibration_replay.sh results/calibration-blind-pass11 replay-one-contender 2 --contenders 1
+# DIR is replaced if it exists (it is this script's output). Calibrations run one after another, each
+# with JOBS workers; a calibration's result does not depend on JOBS.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+[[ $# -ge 2 ]] || { echo "usage: studies/calibration_replay.sh PASS DIR [JOBS] [CALIBRATE OPTIONS...]" >&2; exit 2; }
+pass=${1%/}
+dir=$pass/$2
+jobs=${3:-$(nproc)}
+shift $(( $# < 3 ? $# : 3 ))
+gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
+[[ -f $pass/runs.sqlite && -d $pass/twins && -d $pass/truth ]] ||
+  { echo "error: $pass is not a finished blind pass (runs.sqlite, twins/, truth/ expected)" >&2; exit 2; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cp "$pass/runs.sqlite" "$work/runs.sqlite"
+rm -rf "$dir" && mkdir -p "$dir"
+cp -r "$pass/truth" "$pass/design" "$pass/seed_offset" "$dir/"   # what the summary reads
+for twin in "$pass"/twins/*.toml; do
+  id=$(basename "$twin" .toml)
+  /usr/bin/time -v -o "$dir/$id.time" "$gapflow" calibrate "$twin" --model 2d --out "$dir/$id" \
+    --db "$work/runs.sqlite" --jobs "$jobs" --no-plots "$@" > /dev/null 2>&1
+done
+/usr/bin/python3 calibrate/blind_summary.py "$dir" > /dev/null
