@@ -2,7 +2,7 @@
 # A blind pass's calibrations run again, by another binary or with other calibrate options, on a copy
 # of the pass's store: the same twins, the same seeds. Runs the pass made are reused; new parameter
 # values are simulated into the copy (the pass's own store is not written). Writes PASS/DIR/<case>/
-# (each calibration's report and summary.json) and PASS/DIR/report.md, cases.csv by
+# (each calibration's report and summary.json, its log and /usr/bin/time record) and PASS/DIR/report.md, cases.csv by
 # calibrate/blind_summary.py, with a copy of the pass's truth.
 #
 #   GAPFLOW=<binary> studies/calibration_replay.sh PASS DIR [JOBS] [CALIBRATE OPTIONS...]
@@ -28,6 +28,7 @@ cp -r "$pass/truth" "$pass/design" "$pass/seed_offset" "$dir/"   # what the summ
 for twin in "$pass"/twins/*.toml; do
   id=$(basename "$twin" .toml)
   /usr/bin/time -v -o "$dir/$id.time" "$gapflow" calibrate "$twin" --model 2d --out "$dir/$id" \
-    --db "$work/runs.sqlite" --jobs "$jobs" --no-plots "$@" > /dev/null 2>&1
+    --db "$work/runs.sqlite" --jobs "$jobs" --no-plots "$@" > "$dir/$id.log" 2>&1 ||
+    { echo "error: the calibration of $id failed; see $dir/$id.log" >&2; exit 1; }
 done
 /usr/bin/python3 calibrate/blind_summary.py "$dir" > /dev/null
