@@ -430,27 +430,36 @@ class Loop {
     t.fit = fit_effect(data_, t.surface, start, t.surface.effects.size() - 1, k);
     if (t.fit.restarted)
       say(fmt::format("{}: the first fit stopped at a local minimum; restarted from the profile scan's best value", e.name));
-    // The response holds where it was measured: a fit that moved the free parameters nearer other
-    // surface nodes has its effect measured again there, and is repeated from where it stopped (once).
-    if (!measured_near(ref, t.fit.params)) {
-      say(fmt::format("{}: the fit moved the free parameters to {}; its response is measured again at the nodes nearest",
-                      e.name, free_label(t.fit.params)));
+    // The response holds where it was measured, and the surface only between its nodes: a fit that
+    // moved the free parameters nearer another grid node than the one the response was measured
+    // around has its effect measured again at the grid nodes nearest it, on the surface through the
+    // grid nodes around it (the baseline's runs), and is repeated from where it stopped. A missing
+    // effect pulls the baseline's free parameters away from their truth, and the effect's fit pulls
+    // them back, often beyond the baseline's surface: bounded by it, a size comes out toward neutral
+    // (tests/test_calibration_synthetic.cpp). Up to kMoves times: each costs one measurement.
+    constexpr int kMoves = 3;  // the surface moves at most two nodes a time: three moves reach across a 9-node grid
+    ParameterSet anchor = ref.anchor;
+    for (int move = 0; move < kMoves && !measured_near(anchor, t.fit.params); ++move) {
+      say(fmt::format("{}: the fit moved the free parameters to {}; its response is measured again at the grid nodes "
+                      "nearest, on the surface around them", e.name, free_label(t.fit.params)));
       const Reference near = responses_.reference_with(*base_, t.fit.params, surface.effects);
-      t.surface = surface;
+      t.surface = surface_around(data_, *base_, t.fit.params);
+      t.surface.effects = surface.effects;
       t.surface.effects.push_back(responses_.measure_term(c, near));
       const ParameterSet first = t.fit.params;
       t.fit = fit_effect(data_, t.surface, first, t.surface.effects.size() - 1, k);
       if (t.fit.restarted) say(fmt::format("{}: the re-fit restarted from the profile scan's best value", e.name));
       say(fmt::format("{}: re-fitted on the response measured there: {} = {:.4g} (was {:.4g}), {}", e.name, e.key,
                       t.fit.params.get(e.key, c.neutral), first.get(e.key, c.neutral), free_label(t.fit.params)));
+      anchor = near.anchor;
     }
     t.after = make_state(data_, t.fit.params, t.surface.predict(t.fit.params, data_), k);
     return t;
   }
 
-  // Whether `fitted` is nearest the same surface node as the point `ref` was measured around.
-  bool measured_near(const Reference& ref, const ParameterSet& fitted) const {
-    return nearest_same_node(base_->surface_nodes, base_->surface, fitted, ref.anchor);
+  // Whether `fitted` is nearest the same grid node as `anchor`, the point a response was measured around.
+  bool measured_near(const ParameterSet& anchor, const ParameterSet& fitted) const {
+    return nearest_same_node(base_->grid, base_->surface, fitted, anchor);
   }
 
   std::string free_label(const ParameterSet& p) const {

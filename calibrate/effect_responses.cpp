@@ -74,13 +74,13 @@ Reference EffectResponses::reference_with(const BaselineFit& base, const Paramet
                                           const std::vector<EffectTerm>& effects) {
   Reference r;
   std::vector<ParameterSet> near;
-  for (std::size_t k : nearest_nodes(base.surface_nodes, base.surface, fitted)) near.push_back(base.surface_nodes[k]);
+  for (std::size_t k : nearest_nodes(base.grid, base.surface, fitted)) near.push_back(base.grid[k]);
   r.nodes = nodes_with_effects(near, fitted, effects);
   r.anchor = fitted;
   std::vector<std::string> at;
   for (const ParameterSet& n : near) at.push_back(n.label());
   for (const EffectTerm& t : effects) at.push_back(fmt::format("{} = {:.4g}", t.key, fitted.get(t.key, t.neutral)));
-  say_(fmt::format("reference: the {} surface node(s) nearest the fit, {} ({} runs, reused where made)", r.nodes.size(),
+  say_(fmt::format("reference: the {} grid node(s) nearest the fit, {} ({} runs, reused where made)", r.nodes.size(),
                    fmt::join(at, "; "),
                    r.nodes.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
   r.predictions = ev_.evaluate(r.nodes);

@@ -9,7 +9,7 @@
 //   responses: an effect about to be added, measured at more sizes across its
 //     range, so that its size is fitted on its measured response.
 //
-// The reference: the surface's nodes nearest the fit, with the effects already added
+// The reference: the baseline grid's nodes nearest the fit, with the effects already added
 // set to their fitted values. An effect's response depends on the free parameters it is
 // measured at (a rolling resistance slows a flow of rough spheres differently from one of
 // smooth ones), and the surface adds it unchanged wherever they go; so where an effect's
@@ -65,7 +65,7 @@ class EffectResponses {
 
   // The baseline's nodes as a reference (their runs are made).
   static Reference baseline_reference(const BaselineFit& base) { return {base.nodes, base.node_predictions, base.params}; }
-  // The (up to) three surface nodes nearest `fitted`'s free parameters, with the added effects at
+  // The (up to) three baseline grid nodes nearest `fitted`'s free parameters, with the added effects at
   // their values in `fitted`: one batch of runs (none new for baseline nodes without effects).
   Reference reference_with(const BaselineFit& base, const ParameterSet& fitted, const std::vector<EffectTerm>& effects);
 

@@ -433,6 +433,33 @@ bool nearest_same_node(const std::vector<ParameterSet>& nodes, const Surface& s,
   return nearest_nodes(nodes, s, a, 1) == nearest_nodes(nodes, s, b, 1);
 }
 
+namespace {
+
+// The grid nodes a surface around `at` goes through (surface_around).
+std::vector<std::size_t> window(const DataFile& data, const BaselineFit& base, const ParameterSet& at) {
+  std::vector<std::size_t> all(base.grid.size());
+  std::iota(all.begin(), all.end(), 0);
+  if (data.free.size() != 1 || base.grid.size() <= 5) return all;
+  // One free parameter: the grid is one row of levels, in order.
+  const std::string& key = data.free.front().key;
+  std::size_t nearest = 0;
+  for (std::size_t k = 1; k < base.grid.size(); ++k)
+    if (std::abs(base.grid[k].get(key, 0) - at.get(key, 0)) < std::abs(base.grid[nearest].get(key, 0) - at.get(key, 0)))
+      nearest = k;
+  const std::size_t first = std::min(nearest >= 2 ? nearest - 2 : 0, base.grid.size() - 5);
+  return {first, first + 1, first + 2, first + 3, first + 4};
+}
+
+}  // namespace
+
+Surface surface_around(const DataFile& data, const BaselineFit& base, const ParameterSet& at) {
+  if (data.free.empty()) return build_surface(data, {ParameterSet{}}, {base.grid_predictions.front()});
+  std::vector<ParameterSet> nodes;
+  std::vector<Prediction> preds;
+  for (std::size_t k : window(data, base, at)) nodes.push_back(base.grid[k]), preds.push_back(base.grid_predictions[k]);
+  return build_surface(data, nodes, preds);
+}
+
 BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const Say& say) {
   BaselineFit out;
   // The grid.
@@ -451,27 +478,17 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   const auto best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
   for (std::size_t k = 0; k < grid.size(); ++k)
     say(fmt::format("  {}: chi2 = {:.2f}{}", grid[k].label(), chi2[k], k == best ? "  <- best node" : ""));
-  // The surface's nodes: one parameter, the 5 consecutive nodes around the best;
-  // two or three, every node (3 levels each: the quadratic's minimum).
-  std::vector<std::size_t> local(grid.size());
-  std::iota(local.begin(), local.end(), 0);
-  if (data.free.size() == 1 && grid.size() > 5) {
-    const std::size_t first = std::min(best >= 2 ? best - 2 : 0, grid.size() - 5);
-    local = {first, first + 1, first + 2, first + 3, first + 4};
-  }
-  std::vector<ParameterSet> nodes;
-  std::vector<Prediction> node_preds;
-  for (std::size_t k : local) nodes.push_back(grid[k]), node_preds.push_back(preds[k]);
-  out.surface = data.free.empty() ? build_surface(data, {ParameterSet{}}, {preds.front()}) : build_surface(data, nodes, node_preds);
+  out.grid = grid;
+  out.grid_predictions = preds;
+  out.surface = surface_around(data, out, grid[best]);
   out.params = fit_surface(data, out.surface, grid[best]);
-  // Signatures are taken at the (up to) three nodes nearest the fit.
-  for (std::size_t k : nearest_nodes(nodes, out.surface, out.params))
-    out.nodes.push_back(nodes[k]), out.node_predictions.push_back(node_preds[k]);
-  out.surface_nodes = nodes;
+  // Signatures are taken at the (up to) three grid nodes nearest the fit.
+  for (std::size_t k : nearest_nodes(grid, out.surface, out.params))
+    out.nodes.push_back(grid[k]), out.node_predictions.push_back(preds[k]);
   for (const FreeParameter& f : data.free)
     if (f.has_measurement())
       say(fmt::format("  {} measured {:.4g} +- {:.4g}: a datum of every fit", f.key, f.measured, f.measured_se));
-  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f}{})", nodes.size(),
+  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f}{})", window(data, out, grid[best]).size(),
                   out.params.label(), fitted_chi2(data, out.surface.predict(out.params, data), out.params),
                   measured_count(data) > 0 ? ", the measurements included" : ""));
   return out;

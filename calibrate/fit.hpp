@@ -104,9 +104,17 @@ struct BaselineFit {
   ParameterSet params;                // fitted free parameters
   std::vector<ParameterSet> nodes;    // grid nodes next to the fit (signatures are taken there)
   std::vector<Prediction> node_predictions;
-  std::vector<ParameterSet> surface_nodes;  // every node the surface goes through (responses are measured at
-                                            // the ones nearest a later fit: EffectResponses::reference_with)
+  std::vector<ParameterSet> grid;     // every node of the baseline grid, all simulated (responses are measured
+                                      // at the ones nearest a later fit: EffectResponses::reference_with)
+  std::vector<Prediction> grid_predictions;
 };
+
+// The surface through the baseline grid's nodes around `at`, without effects: one free parameter,
+// the five consecutive nodes around the node nearest `at` (all of them if fewer); two or three,
+// every node (three levels each: a quadratic needs them all). Made from the baseline's runs: no new
+// runs. A fit is bounded to its surface's nodes; an effect's joint fit that ends at that bound is
+// fitted again on the surface around where it stopped (calibration.cpp, fit_trial).
+Surface surface_around(const DataFile& data, const BaselineFit& base, const ParameterSet& at);
 
 // The (up to) `count` of `nodes` nearest `at` in the surface's scaled free parameters, nearest first.
 std::vector<std::size_t> nearest_nodes(const std::vector<ParameterSet>& nodes, const Surface& s, const ParameterSet& at,

@@ -1,0 +1,195 @@
+// The calibration loop end to end on a model with a closed form instead of the simulator: every
+// run of the design is a formula with known responses to the free parameter and to the effects,
+// so what the loop decides (which candidates it fits in full, which it tries, where it measures an
+// effect's response again, the size it reports) can be checked against the truth exactly and in
+// seconds. The simulator's own end-to-end checks are in test_calibration.cpp.
+#include "calibrate/calibration.hpp"
+#include "calibrate/data_file.hpp"
+#include "calibrate/evaluator.hpp"
+#include "calibrate/twin.hpp"
+#include "common/random.hpp"
+#include "studies/jobs.hpp"
+#include "studies/runner.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+namespace gapflow {
+namespace {
+
+using testing::source_path;
+using testing::TempDir;
+
+// ln J_mid (J in particles/s) of a run, by formula. The flow rises with the gap (as W^1.5) and the
+// incline and falls with the particle friction mu; three effects act with shapes that differ over
+// the design: linear drag gamma (1/s) more on the steep board (fast flow), and its size per unit
+// scales with 1 + kDragFrictionCoupling (mu - 0.3) (an effect's response depends on the free
+// parameter, as in the simulator: the reason the loop measures it again near the fit); spinning
+// friction s (mm) like drag but stronger at narrow gaps (a rival that correlates with drag, not a
+// twin of it); rolling resistance mu_r more on the shallow board. Every other catalogue effect
+// moves nothing. Noise: a part common to every parameter value of the same seed, replicate and
+// point (common random numbers) and a part of its own at every parameter value (as a simulator's
+// chaotic dynamics give), so paired differences have noise too.
+constexpr double kDragFrictionCoupling = 2.5;
+constexpr double kCommonNoise = 0.03, kOwnNoise = 0.01;  // on ln J
+
+double synthetic_ln_j(const CompiledScenario& sc, double common_noise, double own_noise) {
+  const ScenarioDef& d = sc.def;
+  const double w_over_d = (d.bottleneck.gap_mm + d.bottleneck.gap_offset_mm) / d.particles.diameter_mm;
+  const double steep = std::sin(d.plane.incline_deg * M_PI / 180) / std::sin(8 * M_PI / 180);
+  const double mu = d.particles.friction_particle;
+  return std::log(50.0) + 1.5 * std::log(w_over_d / 4.5) + 0.7 * std::log(steep) - 2.0 * (mu - 0.3) -
+         0.06 * d.particles.drag_per_s * steep * (1 + kDragFrictionCoupling * (mu - 0.3)) -
+         0.04 * d.particles.spinning_friction_mm * steep * 4.5 / w_over_d -
+         6.0 * d.particles.rolling_resistance / steep + kCommonNoise * common_noise + kOwnNoise * own_noise;
+}
+
+RunRecord synthetic_run(const Job& job, const std::atomic<bool>*) {
+  const CompiledScenario sc = compile_job(job);
+  // The common part is drawn from what a parameter value does not change: seed, replicate, point.
+  const std::uint64_t point = mix_seed(static_cast<std::uint64_t>(std::llround(sc.def.bottleneck.gap_mm * 1000)),
+                                       static_cast<std::uint64_t>(std::llround(sc.def.plane.incline_deg * 1000)));
+  RandomStream common(mix_seed(mix_seed(sc.def.run.seed, static_cast<std::uint64_t>(sc.def.run.replicate)), point));
+  RandomStream own(sc.run_seed);  // mixes the scenario's hash: new at every parameter value
+  RunRecord r;
+  r.model = to_string(job.model);
+  r.scenario_name = sc.def.name;
+  r.scenario_hash = sc.scenario_hash;
+  r.base_seed = sc.def.run.seed;
+  r.replicate = sc.def.run.replicate;
+  r.run_seed = sc.run_seed;
+  r.diameter_m = sc.nominal_diameter;
+  r.gap_m = sc.declared_gap;
+  r.incline_rad = sc.incline;
+  r.particles = 150;
+  r.passed = 150;
+  r.j_mid = std::exp(synthetic_ln_j(sc, common.normal(), own.normal()));
+  r.sim_time_s = 150 / *r.j_mid;
+  r.wall_time_s = 1e-3;
+  return r;
+}
+
+// Every job of a calibration or a twin through the formula (an EvaluatorOptions::runner).
+RunnerSummary run_synthetic(const std::vector<Job>& jobs, Store& store, const RunnerOptions& options) {
+  RunnerOptions o = options;
+  o.run = synthetic_run;
+  return run_jobs(jobs, store, o);
+}
+
+// Nine fitted points (W/d 3.5, 4.5, 5.5 x incline 5, 8, 12 deg) and two held out, J_mid on a log
+// scale, the particle friction free on 0.1-0.5 (grid step 0.05); four model runs per point.
+void write_design(const std::filesystem::path& file) {
+  std::ofstream f(file);
+  f << "[data]\nname = \"synthetic\"\n"
+    << "[source]\ncitation = \"a closed-form model (tests/test_calibration_synthetic.cpp)\"\n"
+    << "method = \"simulated\"\nuncertainty = \"placeholders\"\n"
+    << "[model]\nscenario = \"" << source_path("scenarios/paper/no_obstruction_medium.toml").string() << "\"\n"
+    << "replicates = 4\nseed = 1\n"
+    << "[observable]\nkind = \"j_mid\"\nfloor_relative = 0.005\n"
+    << "[[design]]\ncolumn = \"W_over_d\"\nkey = \"bottleneck.gap_mm\"\nunit = \"d\"\n"
+    << "[[design]]\ncolumn = \"incline_deg\"\nkey = \"plane.incline_deg\"\n"
+    << "[[free]]\nkey = \"particles.friction_particle\"\nlo = 0.1\nhi = 0.5\nstep = 0.05\n";
+  for (double w : {3.5, 4.5, 5.5})
+    for (double incline : {5.0, 8.0, 12.0})
+      f << "[[point]]\nW_over_d = " << w << "\nincline_deg = " << incline << "\nvalue = 1\nuncertainty = 1\n";
+  f << "[[point]]\nW_over_d = 4\nincline_deg = 10\nvalue = 1\nuncertainty = 1\nheld_out = true\n";
+  f << "[[point]]\nW_over_d = 5\nincline_deg = 6\nvalue = 1\nuncertainty = 1\nheld_out = true\n";
+}
+
+struct SyntheticRun {
+  CalibrationResult result;
+  std::string log;  // every decision of the loop (CalibrationResult::log), one a line
+};
+
+// A twin of the design with the friction at `friction` and `effects` planted, calibrated blind.
+SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::string>& effects, int contenders,
+                                 double friction = 0.3) {
+  write_design(dir / "design.toml");
+  const DataFile design = load_data_file(dir / "design.toml");
+  EvaluatorOptions eo;
+  eo.runner = run_synthetic;
+  Store twin_store(dir / "twin.sqlite");
+  Evaluator twin_ev(design, twin_store, eo);
+  TwinDef twin;
+  twin.name = "synthetic-twin";
+  twin.seed = 3;
+  twin.effects = effects;
+  twin.set = {"particles.friction_particle=" + std::to_string(friction)};
+  twin.replicates = 10;
+  (void)make_twin(design, twin, twin_ev, dir / "twin.toml", dir / "truth.json");
+  const DataFile data = load_data_file(dir / "twin.toml");
+  Store store(dir / "cal.sqlite");
+  Evaluator ev(data, store, eo);
+  CalibrationDef def;
+  def.contenders = contenders;
+  SyntheticRun run{calibrate(data, def, ev), ""};
+  for (const std::string& line : run.result.log) run.log += line + "\n";
+  return run;
+}
+
+double friction(const ModelState& s) { return s.params.get("particles.friction_particle", -1); }
+
+// Drag planted at 4 /s: the baseline fit, without drag, takes up its mean by raising the friction
+// (to ~0.42, far from 0.3), where drag's response is 1.3 x its response at the true friction. The
+// loop must find drag, measure its response again at the nodes nearest the joint fit, and report a
+// size whose interval holds 4; measured only at the baseline's node the size would be ~3.
+TEST(CalibrationSynthetic, ADragFoundAtAFrictionFarFromTheBaselinesIsMeasuredAgainThereAndSizedRight) {
+  TempDir dir("gapflow_calibration_synthetic");
+  const SyntheticRun run = calibrate_synthetic(dir, {"linear_drag=4"}, 3);
+  const CalibrationResult& r = run.result;
+  EXPECT_GT(friction(r.before), 0.375) << "the premise: the baseline's friction two nodes or more from the truth";
+  ASSERT_EQ(r.effects.size(), 1u) << r.verdict << "\n" << run.log;
+  const AddedEffect& drag = r.effects.front();
+  EXPECT_EQ(drag.effect, "linear_drag");
+  EXPECT_LE(drag.lo95, 4.0);
+  EXPECT_GE(drag.hi95, 4.0) << drag.value;
+  EXPECT_NEAR(friction(r.after), 0.3, 0.025);
+  EXPECT_NE(run.log.find("linear_drag: the fit moved the free parameters"), std::string::npos) << run.log;
+}
+
+// The truth beyond the baseline's surface: drag at 5 /s with the friction at 0.2 puts the
+// baseline's friction near 0.36, its surface through the nodes 0.25-0.45. Bounded by that surface
+// the joint fit would stop at 0.25 with the drag short of 5; on the surface around where it
+// stopped it reaches the truth.
+TEST(CalibrationSynthetic, AFitThatEndsAtItsSurfacesBoundIsFittedAgainOnTheSurfaceAroundIt) {
+  TempDir dir("gapflow_calibration_synthetic_beyond");
+  const SyntheticRun run = calibrate_synthetic(dir, {"linear_drag=5"}, 3, 0.2);
+  const CalibrationResult& r = run.result;
+  EXPECT_GT(friction(r.before), 0.325) << "the premise: the truth more than a node beyond the baseline's surface";
+  ASSERT_EQ(r.effects.size(), 1u) << r.verdict << "\n" << run.log;
+  const AddedEffect& drag = r.effects.front();
+  EXPECT_EQ(drag.effect, "linear_drag");
+  EXPECT_LE(drag.lo95, 5.0);
+  EXPECT_GE(drag.hi95, 5.0) << drag.value;
+  EXPECT_NEAR(friction(r.after), 0.2, 0.025);
+}
+
+// Spinning friction's signature correlates with drag's: both are significant, each is fitted in
+// full, and the planted one has the lower BIC and is the one tried, whichever scores best.
+TEST(CalibrationSynthetic, WhenTwoCandidatesAreSignificantBothAreFittedAndThePlantedOneIsTried) {
+  TempDir dir("gapflow_calibration_synthetic_contest");
+  const SyntheticRun run = calibrate_synthetic(dir, {"linear_drag=4"}, 3);
+  ASSERT_FALSE(run.result.rounds.empty());
+  const Round& first = run.result.rounds.front();
+  ASSERT_GE(first.fits.size(), 2u) << run.log;
+  const auto fit_of = [&](const std::string& effect) {
+    return std::find_if(first.fits.begin(), first.fits.end(), [&](const ContenderFit& f) { return f.effect == effect; });
+  };
+  ASSERT_NE(fit_of("linear_drag"), first.fits.end());
+  ASSERT_NE(fit_of("spinning_friction"), first.fits.end()) << run.log;
+  EXPECT_LT(fit_of("linear_drag")->bic, fit_of("spinning_friction")->bic);
+  EXPECT_EQ(first.best, "linear_drag");
+
+  // With one contender the best score is tried and nothing is fitted beforehand.
+  TempDir one("gapflow_calibration_synthetic_one");
+  const SyntheticRun single = calibrate_synthetic(one, {"linear_drag=4"}, 1);
+  ASSERT_FALSE(single.result.rounds.empty());
+  EXPECT_TRUE(single.result.rounds.front().fits.empty());
+}
+
+}  // namespace
+}  // namespace gapflow
