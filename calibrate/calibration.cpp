@@ -432,14 +432,18 @@ class Loop {
       say(fmt::format("{}: the first fit stopped at a local minimum; restarted from the profile scan's best value", e.name));
     // The response holds where it was measured, and the surface only between its nodes: a fit that
     // moved the free parameters nearer another grid node than the one the response was measured
-    // around has its effect measured again at the grid nodes nearest it, on the surface through the
-    // grid nodes around it (the baseline's runs), and is repeated from where it stopped. A missing
-    // effect pulls the baseline's free parameters away from their truth, and the effect's fit pulls
-    // them back, often beyond the baseline's surface: bounded by it, a size comes out toward neutral
-    // (tests/test_calibration_synthetic.cpp). Up to kMoves times: each costs one measurement.
-    constexpr int kMoves = 3;  // the surface moves at most two nodes a time: three moves reach across a 9-node grid
+    // around, or stopped at its surface's bound where the grid goes further, has its effect measured
+    // again at the grid nodes nearest it, on the surface through the grid nodes around it (the
+    // baseline's runs), and is repeated from where it stopped. A missing effect pulls the baseline's
+    // free parameters away from their truth, and the effect's fit pulls them back, often beyond the
+    // baseline's surface: bounded by it, a size comes out toward neutral
+    // (tests/test_calibration_synthetic.cpp). One free parameter: up to three moves (the surface's
+    // five nodes follow the fit); two or three: the surface spans the whole grid already, one.
+    // The trial is then judged against a state on another surface: each BIC is its data's deviance
+    // from its own surface, whose standard errors differ a little from window to window.
+    const int moves = n_free_ == 1 ? 3 : 1;
     ParameterSet anchor = ref.anchor;
-    for (int move = 0; move < kMoves && !measured_near(anchor, t.fit.params); ++move) {
+    for (int move = 0; move < moves && must_move(anchor, t); ++move) {
       say(fmt::format("{}: the fit moved the free parameters to {}; its response is measured again at the grid nodes "
                       "nearest, on the surface around them", e.name, free_label(t.fit.params)));
       const Reference near = responses_.reference_with(*base_, t.fit.params, surface.effects);
@@ -453,8 +457,17 @@ class Loop {
                       t.fit.params.get(e.key, c.neutral), first.get(e.key, c.neutral), free_label(t.fit.params)));
       anchor = near.anchor;
     }
+    if (must_move(anchor, t))
+      say(fmt::format("{}: left at {} after {} move(s), its response measured around {}", e.name,
+                      free_label(t.fit.params), moves, free_label(anchor)));
     t.after = make_state(data_, t.fit.params, t.surface.predict(t.fit.params, data_), k);
     return t;
+  }
+
+  // Whether a trial's fit must be repeated where it stopped: nearest another grid node than `anchor`
+  // (where its response was measured), or on its surface's bound where the grid goes further.
+  bool must_move(const ParameterSet& anchor, const Trial& t) const {
+    return !measured_near(anchor, t.fit.params) || at_inner_bound(t.surface, *base_, t.fit.params);
   }
 
   // Whether `fitted` is nearest the same grid node as `anchor`, the point a response was measured around.

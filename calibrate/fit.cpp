@@ -460,6 +460,17 @@ Surface surface_around(const DataFile& data, const BaselineFit& base, const Para
   return build_surface(data, nodes, preds);
 }
 
+bool at_inner_bound(const Surface& s, const BaselineFit& base, const ParameterSet& p) {
+  for (std::size_t k = 0; k < s.keys.size(); ++k) {
+    double grid_lo = INFINITY, grid_hi = -INFINITY;
+    for (const ParameterSet& n : base.grid)
+      grid_lo = std::min(grid_lo, n.get(s.keys[k], 0)), grid_hi = std::max(grid_hi, n.get(s.keys[k], 0));
+    const double x = p.get(s.keys[k], 0), tol = 1e-6 * (s.hi[k] - s.lo[k]);
+    if ((x <= s.lo[k] + tol && s.lo[k] > grid_lo + tol) || (x >= s.hi[k] - tol && s.hi[k] < grid_hi - tol)) return true;
+  }
+  return false;
+}
+
 BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const Say& say) {
   BaselineFit out;
   // The grid.

@@ -115,6 +115,8 @@ struct BaselineFit {
 // runs. A fit is bounded to its surface's nodes; an effect's joint fit that ends at that bound is
 // fitted again on the surface around where it stopped (calibration.cpp, fit_trial).
 Surface surface_around(const DataFile& data, const BaselineFit& base, const ParameterSet& at);
+// Whether `p` sits on one of `s`'s bounds in a free parameter where the baseline grid goes further.
+bool at_inner_bound(const Surface& s, const BaselineFit& base, const ParameterSet& p);
 
 // The (up to) `count` of `nodes` nearest `at` in the surface's scaled free parameters, nearest first.
 std::vector<std::size_t> nearest_nodes(const std::vector<ParameterSet>& nodes, const Surface& s, const ParameterSet& at,
