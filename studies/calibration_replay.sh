@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # A blind pass's calibrations run again, by another binary or with other calibrate options, on a copy
 # of the pass's store: the same twins, the same seeds. Runs the pass made are reused; new parameter
-# values are simulated into the copy (the pass's own store is not written). Writes PASS/DIR/<case>/
+# values are simulated into the copy, DIR/runs.sqlite (the pass's own store is not written). Writes PASS/DIR/<case>/
 # (each calibration's report and summary.json, its log and /usr/bin/time record) and PASS/DIR/report.md, cases.csv by
 # calibrate/blind_summary.py, with a copy of the pass's truth.
 #
 #   GAPFLOW=<binary> studies/calibration_replay.sh PASS DIR [JOBS] [CALIBRATE OPTIONS...]
 #
 # e.g. studies/calibration_replay.sh results/calibration-blind-pass11 replay-one-contender 2 --contenders 1
-# DIR is replaced if it exists (it is this script's output). Calibrations run one after another, each
-# with JOBS workers; a calibration's result does not depend on JOBS.
+# Resumable: run again with the same binary and options, and the calibrations finished are kept and the
+# others continue on DIR/runs.sqlite (the copy of the pass's store, not committed). DIR made with another
+# binary or other options is refused (exit 2). Calibrations run one after another, each with JOBS
+# workers; a calibration's result does not depend on JOBS.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ $# -ge 2 ]] || { echo "usage: studies/calibration_replay.sh PASS DIR [JOBS] [CALIBRATE OPTIONS...]" >&2; exit 2; }
@@ -20,15 +22,21 @@ shift $(( $# < 3 ? $# : 3 ))
 gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 [[ -f $pass/runs.sqlite && -d $pass/twins && -d $pass/truth ]] ||
   { echo "error: $pass is not a finished blind pass (runs.sqlite, twins/, truth/ expected)" >&2; exit 2; }
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cp "$pass/runs.sqlite" "$work/runs.sqlite"
-rm -rf "$dir" && mkdir -p "$dir"
-cp -r "$pass/truth" "$pass/design" "$pass/seed_offset" "$dir/"   # what the summary reads
+made_by="$(sha256sum "$gapflow" | cut -c1-16) $*"
+if [[ -d $dir ]]; then
+  [[ -f $dir/replay.made_by && $(cat "$dir/replay.made_by") == "$made_by" ]] ||
+    { echo "error: $dir was made by another binary or other options; use another DIR or delete it" >&2; exit 2; }
+else
+  mkdir -p "$dir"
+  cp -r "$pass/truth" "$pass/design" "$pass/seed_offset" "$dir/"   # what the summary reads
+  cp "$pass/runs.sqlite" "$dir/runs.sqlite.partial" && mv "$dir/runs.sqlite.partial" "$dir/runs.sqlite"
+  echo "$made_by" > "$dir/replay.made_by"
+fi
 for twin in "$pass"/twins/*.toml; do
   id=$(basename "$twin" .toml)
+  [[ -f $dir/$id/summary.json ]] && continue   # finished (as studies/calibration_blind.sh judges it)
   /usr/bin/time -v -o "$dir/$id.time" "$gapflow" calibrate "$twin" --model 2d --out "$dir/$id" \
-    --db "$work/runs.sqlite" --jobs "$jobs" --no-plots "$@" > "$dir/$id.log" 2>&1 ||
+    --db "$dir/runs.sqlite" --jobs "$jobs" --no-plots "$@" > "$dir/$id.log" 2>&1 ||
     { echo "error: the calibration of $id failed; see $dir/$id.log" >&2; exit 1; }
 done
 /usr/bin/python3 calibrate/blind_summary.py "$dir" > /dev/null

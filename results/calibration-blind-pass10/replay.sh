@@ -7,7 +7,8 @@
 #
 # DIR (default replay) names the output folder under the pass: replay/ is 067155a's replay,
 # replay-contenders/ the one made for 2e95302 (contenders fitted in full, responses measured
-# again near the fit).
+# again near the fit). A DIR that exists is resumed (same binary and options) or refused: delete it to
+# make it again.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 exec studies/calibration_replay.sh results/calibration-blind-pass10 "${2:-replay}" "${1:-$(nproc)}"
