@@ -133,6 +133,17 @@ SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::stri
 
 double friction(const ModelState& s) { return s.params.get("particles.friction_particle", -1); }
 
+// Drag alone was added, its 95 % interval holds the planted size, and the friction is back near its truth.
+void expect_drag_found(const SyntheticRun& run, double planted, double true_friction) {
+  const CalibrationResult& r = run.result;
+  ASSERT_EQ(r.effects.size(), 1u) << r.verdict << "\n" << run.log;
+  const AddedEffect& drag = r.effects.front();
+  EXPECT_EQ(drag.effect, "linear_drag");
+  EXPECT_LE(drag.lo95, planted);
+  EXPECT_GE(drag.hi95, planted) << drag.value;
+  EXPECT_NEAR(friction(r.after), true_friction, 0.025);
+}
+
 // Drag planted at 4 /s: the baseline fit, without drag, takes up its mean by raising the friction
 // (to ~0.42, far from 0.3), where drag's response is 1.3 x its response at the true friction. The
 // loop must find drag, measure its response again at the nodes nearest the joint fit, and report a
@@ -142,12 +153,7 @@ TEST(CalibrationSynthetic, ADragFoundAtAFrictionFarFromTheBaselinesIsMeasuredAga
   const SyntheticRun run = calibrate_synthetic(dir, {"linear_drag=4"}, 3);
   const CalibrationResult& r = run.result;
   EXPECT_GT(friction(r.before), 0.375) << "the premise: the baseline's friction two nodes or more from the truth";
-  ASSERT_EQ(r.effects.size(), 1u) << r.verdict << "\n" << run.log;
-  const AddedEffect& drag = r.effects.front();
-  EXPECT_EQ(drag.effect, "linear_drag");
-  EXPECT_LE(drag.lo95, 4.0);
-  EXPECT_GE(drag.hi95, 4.0) << drag.value;
-  EXPECT_NEAR(friction(r.after), 0.3, 0.025);
+  expect_drag_found(run, 4.0, 0.3);
   EXPECT_NE(run.log.find("linear_drag: the fit moved the free parameters"), std::string::npos) << run.log;
 }
 
@@ -161,12 +167,7 @@ TEST(CalibrationSynthetic, AFitThatEndsAtItsSurfacesBoundIsFittedAgainOnTheSurfa
   const SyntheticRun run = calibrate_synthetic(dir, {"linear_drag=5"}, 3, 0.2);
   const CalibrationResult& r = run.result;
   EXPECT_GT(friction(r.before), 0.325) << "the premise: the truth more than a node beyond the baseline's surface";
-  ASSERT_EQ(r.effects.size(), 1u) << r.verdict << "\n" << run.log;
-  const AddedEffect& drag = r.effects.front();
-  EXPECT_EQ(drag.effect, "linear_drag");
-  EXPECT_LE(drag.lo95, 5.0);
-  EXPECT_GE(drag.hi95, 5.0) << drag.value;
-  EXPECT_NEAR(friction(r.after), 0.2, 0.025);
+  expect_drag_found(run, 5.0, 0.2);
   std::size_t refits = 0;
   for (const std::string& line : r.log) refits += line.rfind("linear_drag: re-fitted on the response", 0) == 0;
   EXPECT_GE(refits, 2u) << "the surface moved once at most: the fit never left the baseline's surface\n" << run.log;
