@@ -138,8 +138,8 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
   o.calibrate->add_option("--db", o.db, "Runs store (default <out>/runs.sqlite; calibrations may share one)");
   o.calibrate->add_option("--max-effects", o.max_effects, "Rounds of adding an effect")->check(CLI::Range(0, 4));
   o.calibrate->add_option("--contenders", o.contenders,
-                          "Significant candidates fitted in full before one is tried, the lowest BIC (1: the best score "
-                          "is tried, as before rule 4)")
+                          "Significant candidates fitted in full before one is tried, the lowest BIC (default 1: the "
+                          "best score is tried; blind passes 11-12 identified as many with 1 as with 3)")
       ->check(CLI::Range(1, 10));
   o.calibrate->add_flag("--no-plots", o.no_plots, "Do not draw the PNG figures");
   o.calibrate->add_flag("--check", o.check, "Read and check the data file (every point's scenario compiled), run nothing");
