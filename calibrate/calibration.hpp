@@ -20,9 +20,10 @@
 //   4. only when the fitted residual is beyond the noise (chi^2 p < alpha) and the
 //      best candidate is significant (calibrate/decisions.hpp): that candidate is
 //      fitted jointly with the free parameters (BOBYQA), its size given with a
-//      profile interval, and kept only if BIC and the held-out chi^2 both improve (when
-//      several candidates are significant, each is fitted so and the lowest BIC is the
-//      one tried: the score's ranking is linear, decisions.hpp rule 4); a
+//      profile interval, and kept only if BIC and the held-out chi^2 both improve (with
+//      CalibrationDef::contenders >= 2, when several candidates are significant, each is
+//      fitted so and the lowest BIC is the one tried: the score's ranking is linear,
+//      decisions.hpp rule 4; the default, 1, tries the best score); a
 //      second round may add one more, its response measured anew with the first
 //      effect in place (calibrate/effect_responses.hpp: effects do not add up). A
 //      first effect with decisive BIC evidence that the held-out points veto is tried

@@ -35,7 +35,9 @@
 //    is fitted in full on its measured response, and the lowest BIC is the one tried (same
 //    number of parameters: the lowest deviance, a likelihood comparison of the fitted
 //    alternatives). Only WHICH effect is tried changes, never WHETHER: a round tries an
-//    effect exactly when it did before (rule 1), and the chosen one meets rule 2.
+//    effect exactly when it did before (rule 1), and the chosen one meets rule 2. Not the
+//    default (CalibrationDef::contenders = 1): over blind passes 11 and 12 it identified no
+//    more effects (28 of 36 either way) for about 1.2-1.3 x the CPU.
 #pragma once
 
 #include <string>
