@@ -453,8 +453,7 @@ std::vector<std::size_t> window(const DataFile& data, const BaselineFit& base, c
 }  // namespace
 
 Surface surface_around(const DataFile& data, const BaselineFit& base, const ParameterSet& at) {
-  if (data.free.empty()) return build_surface(data, {ParameterSet{}}, {base.grid_predictions.front()});
-  std::vector<ParameterSet> nodes;
+  std::vector<ParameterSet> nodes;  // without free parameters the grid is one empty set: the surface is a constant
   std::vector<Prediction> preds;
   for (std::size_t k : window(data, base, at)) nodes.push_back(base.grid[k]), preds.push_back(base.grid_predictions[k]);
   return build_surface(data, nodes, preds);
@@ -491,6 +490,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
     say(fmt::format("  {}: chi2 = {:.2f}{}", grid[k].label(), chi2[k], k == best ? "  <- best node" : ""));
   out.grid = grid;
   out.grid_predictions = preds;
+  const std::size_t surface_nodes = window(data, out, grid[best]).size();
   out.surface = surface_around(data, out, grid[best]);
   out.params = fit_surface(data, out.surface, grid[best]);
   // Signatures are taken at the (up to) three grid nodes nearest the fit.
@@ -499,7 +499,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   for (const FreeParameter& f : data.free)
     if (f.has_measurement())
       say(fmt::format("  {} measured {:.4g} +- {:.4g}: a datum of every fit", f.key, f.measured, f.measured_se));
-  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f}{})", window(data, out, grid[best]).size(),
+  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f}{})", surface_nodes,
                   out.params.label(), fitted_chi2(data, out.surface.predict(out.params, data), out.params),
                   measured_count(data) > 0 ? ", the measurements included" : ""));
   return out;
