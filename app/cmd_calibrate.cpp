@@ -24,6 +24,7 @@ struct CalibrateCommands::Options {
   bool no_plots = false, mpi = false, check = false;
   int max_effects = 2;
   int contenders = CalibrationDef{}.contenders;
+  double decisive_score_p = CalibrationDef{}.decisive_score_p;
   // twin
   std::uint64_t seed = 1;
   std::vector<std::string> effects, set;
@@ -64,6 +65,7 @@ int cmd_calibrate(const CalibrateCommands::Options& o) {
   def.model = parse_model_kind(o.model);
   def.max_effects = o.max_effects;
   def.contenders = o.contenders;
+  def.decisive_score_p = o.decisive_score_p;
   // Under MPI every rank has read and checked the data file; ranks >= 1 only simulate.
   std::unique_ptr<MpiSession> mpi = o.mpi ? std::make_unique<MpiSession>() : nullptr;
   g_cancel.store(false);
@@ -141,6 +143,10 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
                           "Significant candidates fitted in full before one is tried, the lowest BIC (default 1: the "
                           "best score is tried; blind passes 11-12 identified as many with 1 as with 3)")
       ->check(CLI::Range(1, 10));
+  o.calibrate->add_option("--decisive-score", o.decisive_score_p,
+                          "Adjusted p below which the best candidate is tried even where the fitted chi2 is within "
+                          "the noise (default 0: never; rule 1 of calibrate/decisions.hpp)")
+      ->check(CLI::Range(0.0, 0.05));
   o.calibrate->add_flag("--no-plots", o.no_plots, "Do not draw the PNG figures");
   o.calibrate->add_flag("--check", o.check, "Read and check the data file (every point's scenario compiled), run nothing");
   o.calibrate->add_flag("--mpi", o.mpi,

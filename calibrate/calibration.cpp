@@ -343,8 +343,12 @@ class Loop {
   // prefixed by `context` (a pair's second round names the effect in place).
   bool worth_trying(Round& round, const ModelState& state, const Candidate* best, const std::string& context = "") {
     const double p = state.fitted.chi.p;
-    switch (should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha)) {
+    switch (should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha, def_.decisive_score_p)) {
       case Attribute::yes: return true;
+      case Attribute::decisive_score:
+        say(fmt::format("{}the residual's chi2 is within the noise (p = {:.3g}) but {}'s score is decisive (adjusted p = "
+                        "{:.3g} < {:.3g}): tried", context, p, best->effect, best->p_adjusted, def_.decisive_score_p));
+        return true;
       case Attribute::consistent_with_noise:
         round.decision = best ? fmt::format("the residual is consistent with the noise (chi2 p = {:.3g}): nothing to "
                                             "explain (best candidate {}: adjusted p = {:.3g})", p, best->effect, best->p_adjusted)
@@ -650,6 +654,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.verdict = final_verdict(evidence);
   out.alpha = def.alpha;
   out.contenders = def.contenders;
+  out.decisive_score_p = def.decisive_score_p;
   out.runs_simulated = ev.runs_simulated();
   out.runs_reused = ev.runs_reused();
   out.run_seconds = ev.run_seconds();

@@ -51,6 +51,8 @@ struct CalibrationDef {
   int max_effects = 2;             // rounds of "add an effect"
   int contenders = 1;              // significant candidates fitted in full before one is tried (decisions.hpp, rule 4);
                                    // 1: the best score (blind passes 11-12: 28 of 36 identified with 1 and with 3)
+  double decisive_score_p = 0;     // a best score with adjusted p below this is tried even where the fitted chi^2 is
+                                   // within the noise (decisions.hpp, rule 1's option; 0: never)
   int grid_max = 9;                // grid nodes of a one-parameter baseline fit
   int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)
   std::uint64_t fresh_seed_offset = 7919;  // run.seed offset of the fresh-seed re-score (reported, decides nothing)
@@ -141,6 +143,7 @@ struct CalibrationResult {
   std::string summary;             // one paragraph for people
   double alpha = 0.05;             // the level the loop's tests used (CalibrationDef::alpha)
   int contenders = 1;              // CalibrationDef::contenders it ran with
+  double decisive_score_p = 0;     // CalibrationDef::decisive_score_p it ran with
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
   // The held-out points after everything (fresh seeds), their chi^2 with the fitted parameters'
   // uncertainty carried to them (attribution.hpp held_out_chi_square): the verdict's test.

@@ -86,6 +86,7 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                               json_string(f.key), json_number(f.measured), json_number(f.measured_se));
   o << "  \"measured_free\": [" << measured << "],\n";
   o << fmt::format("  \"contenders\": {},\n", r.contenders);
+  o << fmt::format("  \"decisive_score_p\": {},\n", r.decisive_score_p);
   o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n  \"held_out_beyond_noise\": {},\n", json_string(r.verdict),
                    r.poor_fit ? "true" : "false", r.held_out_beyond_noise ? "true" : "false");
   o << fmt::format("  \"held_out_fresh_fit_aware\": {{\"chi2\": {}, \"dof\": {}, \"p\": {}}},\n",

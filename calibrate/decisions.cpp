@@ -7,8 +7,10 @@
 
 namespace gapflow {
 
-Attribute should_attribute(double residual_p, bool any_visible, double best_p_adjusted, double alpha) {
-  if (residual_p >= alpha) return Attribute::consistent_with_noise;
+Attribute should_attribute(double residual_p, bool any_visible, double best_p_adjusted, double alpha,
+                           double decisive_score_p) {
+  if (residual_p >= alpha)
+    return any_visible && best_p_adjusted < decisive_score_p ? Attribute::decisive_score : Attribute::consistent_with_noise;
   if (!any_visible) return Attribute::nothing_visible;
   if (best_p_adjusted >= alpha) return Attribute::nothing_significant;
   return Attribute::yes;

@@ -4,8 +4,9 @@
 # the 2D model; then the summary (confusion matrix, interval coverage, null
 # false-positive rate, held-out error before/after) in OUT/report.md.
 #
-#   studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN]
-#       (default results/calibration-blind, all cores, offset 0, data/blind/design.toml)
+#   studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN] [CALIBRATE OPTIONS...]
+#       (default results/calibration-blind, all cores, offset 0, data/blind/design.toml; options
+#       after DESIGN go to every `gapflow calibrate`, e.g. --decisive-score 1e-4)
 #
 # SEED_OFFSET is added to every case's seed: another offset draws another set of twins (other
 # sizes, other data noise) for the same cases, to test rules chosen after seeing one set on
@@ -22,6 +23,7 @@ jobs=${2:-$(nproc)}
 seed_offset=${3:-0}
 gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 design=${4:-data/blind/design.toml}
+calibrate_options=("${@:5}")
 mkdir -p "$out/twins" "$out/truth"
 # Twins and summaries of one seed offset must not be mixed with another's (an OUT with twins and
 # no record was made before the offset existed: offset 0).
@@ -45,6 +47,15 @@ if [[ -n $recorded_design && $recorded_design != "$design" ]]; then
   exit 2
 fi
 echo "$design" > "$out/design"
+# And the calibrations' options (an OUT without a record ran with none).
+options_text="${calibrate_options[*]}"
+recorded_options=""
+if [[ -f $out/calibrate_options ]]; then recorded_options=$(cat "$out/calibrate_options"); fi
+if [[ $recorded_options != "$options_text" ]] && compgen -G "$out/*/summary.json" > /dev/null; then
+  echo "error: $out was calibrated with options '$recorded_options', not '$options_text'; use another OUT" >&2
+  exit 2
+fi
+echo "$options_text" > "$out/calibrate_options"
 
 # id  model  seed  planted (effect:NAME:SIZE | set:KEY=VALUE), space-separated
 cases="
@@ -96,7 +107,8 @@ echo "$cases" | while read -r id model seed planted; do
   if [ ! -f "$out/$id/summary.json" ]; then
     echo "== calibrate $id (2d, blind)" >&2
     /usr/bin/time -f "%e s wall" -o "$out/$id.time" \
-      "$gapflow" calibrate "$twin" --model 2d --out "$out/$id" --db "$out/runs.sqlite" --jobs "$jobs" --no-plots
+      "$gapflow" calibrate "$twin" --model 2d --out "$out/$id" --db "$out/runs.sqlite" --jobs "$jobs" --no-plots \
+      "${calibrate_options[@]}"
   fi
 done
 /usr/bin/python3 calibrate/blind_summary.py "$out"

@@ -35,6 +35,20 @@ TEST(AttributeDecision, AResidualWithinTheNoiseIsNotAttributedEvenToASignificant
   EXPECT_EQ(should_attribute(0.0117, true, 0.05, 0.05), Attribute::nothing_significant);
 }
 
+TEST(ShouldAttribute, ADecisiveScoreIsTriedWhereTheChiSquareIsWithinTheNoise) {
+  // Blind pass 12's scatter-low: size scatter's adjusted p 5.6e-7, the fitted chi^2 p 0.11.
+  EXPECT_EQ(should_attribute(0.11, true, 5.6e-7, 0.05), Attribute::consistent_with_noise);  // off by default
+  EXPECT_EQ(should_attribute(0.11, true, 5.6e-7, 0.05, 1e-4), Attribute::decisive_score);
+  // The nulls' smallest adjusted p over passes 8-12 (4.7e-4) stays below the option's reach.
+  EXPECT_EQ(should_attribute(0.11, true, 4.7e-4, 0.05, 1e-4), Attribute::consistent_with_noise);
+  // The threshold itself does not reject; nothing visible is never decisive.
+  EXPECT_EQ(should_attribute(0.11, true, 1e-4, 0.05, 1e-4), Attribute::consistent_with_noise);
+  EXPECT_EQ(should_attribute(0.11, false, 0.0, 0.05, 1e-4), Attribute::consistent_with_noise);
+  // Beyond the noise the option changes nothing.
+  EXPECT_EQ(should_attribute(0.0117, true, 0.2, 0.05, 1e-4), Attribute::nothing_significant);
+  EXPECT_EQ(should_attribute(0.0117, true, 5.6e-7, 0.05, 1e-4), Attribute::yes);
+}
+
 TEST(FinalVerdict, ConsistentWithNoiseNeedsTheHeldOutPointsWithinTheNoiseToo) {
   // Blind pass 7, rolling-high: fitted chi^2 p 0.157, held-out (fresh seeds, the fit's uncertainty
   // included) p 0.00648, no effect
