@@ -39,6 +39,11 @@ Score score_signature(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   return s;
 }
 
+bool size_direction_possible(double estimate, double neutral, double lo, double hi, double step) {
+  const double room = estimate > 0 ? hi - neutral : estimate < 0 ? neutral - lo : 1.0;
+  return room > 0.25 * std::abs(step);
+}
+
 std::vector<std::vector<int>> indistinguishable_groups(const std::vector<Eigen::VectorXd>& signatures,
                                                        const Eigen::MatrixXd& X, double threshold) {
   const Eigen::MatrixXd P = projector_out(X);

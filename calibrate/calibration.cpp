@@ -246,6 +246,10 @@ class Loop {
       Eigen::VectorXd u = Eigen::VectorXd::Zero(n_rows);  // an effect does not move a measurement
       u.head(n_points) = fitted_whitened(data_, at, cands[c].signature);
       cands[c].score = score_signature(rv, X, u);
+      const EffectDef& e = *find_effect(cands[c].effect);
+      cands[c].direction_possible =
+          size_direction_possible(cands[c].score.estimate, cands[c].neutral, e.lo, e.hi, cands[c].step);
+      if (!cands[c].direction_possible) cands[c].score.statistic = 0, cands[c].score.p = 1;
       visible_u.push_back(u);
       visible_index.push_back(c);
     }

@@ -101,6 +101,8 @@ struct Candidate {
   std::vector<double> signature;  // d(fit)/d(key) per point
   Score score;                 // against the residual of the round
   double p_adjusted = 1;       // Bonferroni over the visible candidates
+  bool direction_possible = true;  // the linearised size points where the effect's range goes; if not, the
+                                   // score is 0 and p 1 (attribution.hpp, size_direction_possible)
   int group = -1;              // index into the round's groups
 };
 

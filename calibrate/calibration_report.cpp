@@ -116,13 +116,14 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                      i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals), fits);
     for (std::size_t c = 0; c < rd.candidates.size(); ++c) {
       const Candidate& k = rd.candidates[c];
-      o << fmt::format(R"({}{{"effect": {}, "step": {}, "other_step": {}, "other_visibility_p": {}, "visible": {}, "visibility_p": {}, "signature_chi2": {}, "signature_points": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "left_by_fit": {}, "group": {}}})",
+      o << fmt::format(R"({}{{"effect": {}, "step": {}, "other_step": {}, "other_visibility_p": {}, "visible": {}, "visibility_p": {}, "signature_chi2": {}, "signature_points": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "left_by_fit": {}, "direction_possible": {}, "group": {}}})",
                        c ? ", " : "", json_string(k.effect), json_number(k.step),
                        k.other_step != 0 ? json_number(k.other_step) : "null",
                        k.other_step != 0 ? json_number(k.other_visibility_p) : "null", k.visible ? "true" : "false",
                        json_number(k.visibility_p), json_number(k.signature_chi2), k.signature_dof, json_number(k.score.statistic), json_number(k.score.p),
                        json_number(k.p_adjusted), json_number(k.score.estimate),
-                       k.visible ? json_number(k.score.left_by_fit()) : "null", k.group);
+                       k.visible ? json_number(k.score.left_by_fit()) : "null",
+                       k.direction_possible ? "true" : "false", k.group);
     }
     o << "]}";
   }
@@ -239,7 +240,7 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
       o << fmt::format("`{}` against its measurement {:.4g} +- {:.4g}: {:+.2f} se before, {:+.2f} se after.\n", f.key,
                        f.measured, f.measured_se, (r.before.params.get(f.key, f.measured) - f.measured) / f.measured_se,
                        (r.after.params.get(f.key, f.measured) - f.measured) / f.measured_se);
-  o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates. A step whose paired chi2 stays below 4 per fitted point (2 se a point) leaves a signature mostly noise: the effect is moved again to the end of its range (or as far toward it as every point allows) and the step that moved the model more clearly is used (*step -> end*: the end; *step (end tried)*: the first), visible then at half the level (the better of two looks). *Left by the fit*: the share of the signature's length that the fitted parameters cannot mimic, |P u| / |u| (whitened): near 0, the effect is absorbed by the fit in this design, and whatever of it the data hold ends up in the fitted parameters; a design that varies what tells them apart is needed to see it.\n";
+  o << "\n## Candidate effects\n\nEach effect moved by its physical step at the baseline fit (same seeds); *visible* when that moved the model beyond its noise (paired chi2, p < 0.01). Score test of the signature, with the fitted parameters projected out, against the residual; p adjusted (Bonferroni) over the visible candidates. An effect whose range lies on one side of its neutral value (most: a drag, a tilt, a rounding cannot go below none) is scored one-sided: where its linearised size points outside the range, its score is 0 and p 1 (marked). A step whose paired chi2 stays below 4 per fitted point (2 se a point) leaves a signature mostly noise: the effect is moved again to the end of its range (or as far toward it as every point allows) and the step that moved the model more clearly is used (*step -> end*: the end; *step (end tried)*: the first), visible then at half the level (the better of two looks). *Left by the fit*: the share of the signature's length that the fitted parameters cannot mimic, |P u| / |u| (whitened): near 0, the effect is absorbed by the fit in this design, and whatever of it the data hold ends up in the fitted parameters; a design that varies what tells them apart is needed to see it.\n";
   for (std::size_t i = 0; i < r.rounds.size(); ++i) {
     const Round& rd = r.rounds[i];
     o << fmt::format("\n### Round {}\n\n| effect | step | visible (p) | left by the fit | score | p | adjusted p | linearised size | group |\n|---|---|---|---|---|---|---|---|---|\n", i + 1);
@@ -251,7 +252,9 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                        c.visible ? fmt::format("{:.0f} %", 100 * c.score.left_by_fit()) : "",
                        c.visible ? fmt::format("{:.2f}", c.score.statistic) : "",
                        c.visible ? fmt::format("{:.3g}", c.score.p) : "", c.visible ? fmt::format("{:.3g}", c.p_adjusted) : "",
-                       c.visible ? fmt::format("{:.4g} ± {:.2g}", c.neutral + c.score.estimate, c.score.se) : "",
+                       c.visible ? fmt::format("{:.4g} ± {:.2g}{}", c.neutral + c.score.estimate, c.score.se,
+                                               c.direction_possible ? "" : " (outside its range: score 0)")
+                                 : "",
                        c.group >= 0 ? std::to_string(c.group) : "");
     for (const auto& g : rd.groups) o << fmt::format("\nIndistinguishable in this design (|cos| > 0.9): {}.\n", fmt::join(g, ", "));
     if (!rd.fits.empty()) {

@@ -75,6 +75,23 @@ TEST(Attribution, ProjectionRemovesTheCalibratedDirection) {
   EXPECT_NEAR(score_signature(X.col(0) * 3.0, X, u).statistic, 0.0, 1e-9);
 }
 
+TEST(Attribution, AnEffectIsScoredOnlyForSizesItsRangeHas) {
+  // Linear drag (neutral 0, range [0, 6] 1/s, step 2): pass 13's wallfriction-low asked for -0.66.
+  EXPECT_FALSE(size_direction_possible(-0.66, 0.0, 0.0, 6.0, 2.0));
+  EXPECT_TRUE(size_direction_possible(0.5, 0.0, 0.0, 6.0, 2.0));
+  // Rolling resistance: neutral 0.001 in [0, 0.02], step 0.01: 0.001 of room below is less than a
+  // quarter step, so the effect is one-sided too.
+  EXPECT_FALSE(size_direction_possible(-0.004, 0.001, 0.0, 0.02, 0.01));
+  // Wall friction (neutral 0.24 in [0.05, 0.8], step -0.15) and size scatter (0.05 in [0, 0.2],
+  // step 0.1) go both ways.
+  EXPECT_TRUE(size_direction_possible(-0.05, 0.24, 0.05, 0.8, -0.15));
+  EXPECT_TRUE(size_direction_possible(0.05, 0.24, 0.05, 0.8, -0.15));
+  EXPECT_TRUE(size_direction_possible(-0.03, 0.05, 0.0, 0.2, 0.1));
+  // At neutral (no direction) nothing is ruled out; a range end that is not neutral's still counts.
+  EXPECT_TRUE(size_direction_possible(0.0, 0.0, 0.0, 6.0, 2.0));
+  EXPECT_FALSE(size_direction_possible(0.2, 6.0, 0.0, 6.0, 2.0));
+}
+
 TEST(Attribution, CollinearSignaturesFormOneGroup) {
   const int n = 9;
   const Eigen::MatrixXd X(n, 0);
