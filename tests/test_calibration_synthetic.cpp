@@ -16,7 +16,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <iostream>
+
+#include <fmt/format.h>
 
 namespace gapflow {
 namespace {
@@ -35,7 +39,22 @@ using testing::TempDir;
 // point (common random numbers) and a part of its own at every parameter value (as a simulator's
 // chaotic dynamics give), so paired differences have noise too.
 constexpr double kDragFrictionCoupling = 2.5;
-constexpr double kCommonNoise = 0.03, kOwnNoise = 0.01;  // on ln J
+struct NoiseLevels {
+  double common = 0.03, own = 0.01;  // standard deviations on ln J
+};
+NoiseLevels g_noise;  // a test may change it (NoiseScope)
+
+// Sets the closed-form model's noise for one test and restores it after.
+class NoiseScope {
+ public:
+  explicit NoiseScope(NoiseLevels levels) : saved_(g_noise) { g_noise = levels; }
+  ~NoiseScope() { g_noise = saved_; }
+  NoiseScope(const NoiseScope&) = delete;
+  NoiseScope& operator=(const NoiseScope&) = delete;
+
+ private:
+  NoiseLevels saved_;
+};
 
 double synthetic_ln_j(const CompiledScenario& sc, double common_noise, double own_noise) {
   const ScenarioDef& d = sc.def;
@@ -45,7 +64,7 @@ double synthetic_ln_j(const CompiledScenario& sc, double common_noise, double ow
   return std::log(50.0) + 1.5 * std::log(w_over_d / 4.5) + 0.7 * std::log(steep) - 2.0 * (mu - 0.3) -
          0.06 * d.particles.drag_per_s * steep * (1 + kDragFrictionCoupling * (mu - 0.3)) -
          0.04 * d.particles.spinning_friction_mm * steep * 4.5 / w_over_d -
-         6.0 * d.particles.rolling_resistance / steep + kCommonNoise * common_noise + kOwnNoise * own_noise;
+         6.0 * d.particles.rolling_resistance / steep + g_noise.common * common_noise + g_noise.own * own_noise;
 }
 
 RunRecord synthetic_run(const Job& job, const std::atomic<bool>*) {
@@ -81,14 +100,14 @@ RunnerSummary run_synthetic(const std::vector<Job>& jobs, Store& store, const Ru
 }
 
 // Nine fitted points (W/d 3.5, 4.5, 5.5 x incline 5, 8, 12 deg) and two held out, J_mid on a log
-// scale, the particle friction free on 0.1-0.5 (grid step 0.05); four model runs per point.
-void write_design(const std::filesystem::path& file) {
+// scale, the particle friction free on 0.1-0.5 (grid step 0.05); `model_replicates` model runs per point.
+void write_design(const std::filesystem::path& file, int model_replicates) {
   std::ofstream f(file);
   f << "[data]\nname = \"synthetic\"\n"
     << "[source]\ncitation = \"a closed-form model (tests/test_calibration_synthetic.cpp)\"\n"
     << "method = \"simulated\"\nuncertainty = \"placeholders\"\n"
     << "[model]\nscenario = \"" << source_path("scenarios/paper/no_obstruction_medium.toml").string() << "\"\n"
-    << "replicates = 4\nseed = 1\n"
+    << "replicates = " << model_replicates << "\nseed = 1\n"
     << "[observable]\nkind = \"j_mid\"\nfloor_relative = 0.005\n"
     << "[[design]]\ncolumn = \"W_over_d\"\nkey = \"bottleneck.gap_mm\"\nunit = \"d\"\n"
     << "[[design]]\ncolumn = \"incline_deg\"\nkey = \"plane.incline_deg\"\n"
@@ -107,8 +126,8 @@ struct SyntheticRun {
 
 // A twin of the design with the friction at `friction` and `effects` planted, calibrated blind.
 SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::string>& effects, int contenders,
-                                 double friction = 0.3) {
-  write_design(dir / "design.toml");
+                                 double friction = 0.3, std::uint64_t twin_seed = 3, int model_replicates = 4) {
+  write_design(dir / "design.toml", model_replicates);
   const DataFile design = load_data_file(dir / "design.toml");
   EvaluatorOptions eo;
   eo.runner = run_synthetic;
@@ -116,7 +135,7 @@ SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::stri
   Evaluator twin_ev(design, twin_store, eo);
   TwinDef twin;
   twin.name = "synthetic-twin";
-  twin.seed = 3;
+  twin.seed = twin_seed;
   twin.effects = effects;
   twin.set = {"particles.friction_particle=" + std::to_string(friction)};
   twin.replicates = 10;
@@ -194,6 +213,45 @@ TEST(CalibrationSynthetic, WhenTwoCandidatesAreSignificantBothAreFittedAndThePla
   const SyntheticRun single = calibrate_synthetic(one, {"linear_drag=4"}, 1);
   ASSERT_FALSE(single.result.rounds.empty());
   EXPECT_TRUE(single.result.rounds.front().fits.empty());
+}
+
+// Without noise the loop is unbiased: a planted drag comes back within 1 % and the friction at its
+// truth. Blind passes 9-13 missed 31 of their recovered sizes' intervals, every one toward neutral;
+// this says the bias is not in the fit's structure (surface, response interpolation, re-measurement),
+// and SizeBiasAgainstModelNoise (below) shows where it is.
+TEST(CalibrationSynthetic, WithoutNoiseAPlantedDragIsRecoveredWithinOnePercent) {
+  const NoiseScope quiet({1e-4, 1e-4});
+  TempDir dir("gapflow_calibration_synthetic_noiseless");
+  const SyntheticRun run = calibrate_synthetic(dir, {"linear_drag=3"}, 1);
+  ASSERT_EQ(run.result.effects.size(), 1u) << run.log;
+  EXPECT_EQ(run.result.effects.front().effect, "linear_drag");
+  EXPECT_NEAR(run.result.effects.front().value, 3.0, 0.03) << run.log;
+  EXPECT_NEAR(friction(run.result.after), 0.3, 0.002);
+}
+
+// Exploration, not run by default (prints; asserts nothing): the recovered size of a planted drag of
+// 3 /s over twin seeds, with the model's noise mostly of each parameter value's own, as the
+// simulator's is (trajectories part within a few collisions). Knobs: GAPFLOW_COMMON_NOISE,
+// GAPFLOW_OWN_NOISE (sd on ln J; default 0.005, 0.03), GAPFLOW_MODEL_REPS (model runs per point,
+// default 4), GAPFLOW_SEEDS (twins, default 8). README, "Calibration": the numbers it gave.
+//   GAPFLOW_SEEDS=3 build/tests/gapflow_tests --gtest_also_run_disabled_tests --gtest_filter='*SizeBias*'
+TEST(CalibrationSynthetic, DISABLED_SizeBiasAgainstModelNoise) {
+  const auto knob = [](const char* name, double fallback) {
+    const char* v = std::getenv(name);
+    return v ? std::stod(v) : fallback;
+  };
+  const NoiseScope noise({knob("GAPFLOW_COMMON_NOISE", 0.005), knob("GAPFLOW_OWN_NOISE", 0.03)});
+  const int reps = static_cast<int>(knob("GAPFLOW_MODEL_REPS", 4));
+  const auto seeds = static_cast<std::uint64_t>(knob("GAPFLOW_SEEDS", 8));
+  std::cout << fmt::format("noise common {} own {} on ln J, {} model runs per point\n", g_noise.common, g_noise.own, reps);
+  for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
+    TempDir dir("gapflow_calibration_synthetic_bias");
+    const CalibrationResult r = calibrate_synthetic(dir, {"linear_drag=3"}, 1, 0.3, seed, reps).result;
+    std::string sizes;
+    for (const AddedEffect& e : r.effects) sizes += fmt::format("{} {:.3f} [{:.3f}, {:.3f}] ", e.effect, e.value, e.lo95, e.hi95);
+    std::cout << fmt::format("seed {}: {}friction {:.3f}; chi2/nu after {:.2f}\n", seed, sizes, friction(r.after),
+                             r.after.fitted.chi.per_dof());
+  }
 }
 
 }  // namespace
