@@ -109,14 +109,15 @@ RunnerSummary run_synthetic(const std::vector<Job>& jobs, Store& store, const Ru
 }
 
 // Nine fitted points (W/d 3.5, 4.5, 5.5 x incline 5, 8, 12 deg) and two held out, J_mid on a log
-// scale, the particle friction free on 0.1-0.5 (grid step 0.05); `model_replicates` model runs per point.
-void write_design(const std::filesystem::path& file, int model_replicates) {
+// scale, the particle friction free on 0.1-0.5 (grid step 0.05); `model_replicates` model runs per point
+// from base seed `model_seed`.
+void write_design(const std::filesystem::path& file, int model_replicates, std::uint64_t model_seed) {
   std::ofstream f(file);
   f << "[data]\nname = \"synthetic\"\n"
     << "[source]\ncitation = \"a closed-form model (tests/test_calibration_synthetic.cpp)\"\n"
     << "method = \"simulated\"\nuncertainty = \"placeholders\"\n"
     << "[model]\nscenario = \"" << source_path("scenarios/paper/no_obstruction_medium.toml").string() << "\"\n"
-    << "replicates = " << model_replicates << "\nseed = 1\n"
+    << "replicates = " << model_replicates << "\nseed = " << model_seed << "\n"
     << "[observable]\nkind = \"j_mid\"\nfloor_relative = 0.005\n"
     << "[[design]]\ncolumn = \"W_over_d\"\nkey = \"bottleneck.gap_mm\"\nunit = \"d\"\n"
     << "[[design]]\ncolumn = \"incline_deg\"\nkey = \"plane.incline_deg\"\n"
@@ -134,9 +135,18 @@ struct SyntheticRun {
 };
 
 // A twin of the design with the friction at `friction` and `effects` planted, calibrated blind.
+// What a synthetic twin varies besides its effects: the true friction, the twin's seed (its data's
+// noise), and the calibration's model runs per point and base seed (the model's noise).
+struct SyntheticCase {
+  double friction = 0.3;
+  std::uint64_t twin_seed = 3;
+  int model_replicates = 4;
+  std::uint64_t model_seed = 1;
+};
+
 SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::string>& effects, int contenders,
-                                 double friction = 0.3, std::uint64_t twin_seed = 3, int model_replicates = 4) {
-  write_design(dir / "design.toml", model_replicates);
+                                 const SyntheticCase& c = {}) {
+  write_design(dir / "design.toml", c.model_replicates, c.model_seed);
   const DataFile design = load_data_file(dir / "design.toml");
   EvaluatorOptions eo;
   eo.runner = run_synthetic;
@@ -144,9 +154,9 @@ SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::stri
   Evaluator twin_ev(design, twin_store, eo);
   TwinDef twin;
   twin.name = "synthetic-twin";
-  twin.seed = twin_seed;
+  twin.seed = c.twin_seed;
   twin.effects = effects;
-  twin.set = {"particles.friction_particle=" + std::to_string(friction)};
+  twin.set = {"particles.friction_particle=" + std::to_string(c.friction)};
   twin.replicates = 10;
   (void)make_twin(design, twin, twin_ev, dir / "twin.toml", dir / "truth.json");
   const DataFile data = load_data_file(dir / "twin.toml");
@@ -192,7 +202,7 @@ TEST(CalibrationSynthetic, ADragFoundAtAFrictionFarFromTheBaselinesIsMeasuredAga
 // stopped, it reaches the truth.
 TEST(CalibrationSynthetic, AFitThatEndsAtItsSurfacesBoundIsFittedAgainOnTheSurfaceAroundIt) {
   TempDir dir("gapflow_calibration_synthetic_beyond");
-  const SyntheticRun run = calibrate_synthetic(dir, {"linear_drag=5"}, 3, 0.2);
+  const SyntheticRun run = calibrate_synthetic(dir, {"linear_drag=5"}, 3, {.friction = 0.2});
   const CalibrationResult& r = run.result;
   EXPECT_GT(friction(r.before), 0.325) << "the premise: the truth more than a node beyond the baseline's surface";
   expect_drag_found(run, 5.0, 0.2);
@@ -224,10 +234,11 @@ TEST(CalibrationSynthetic, WhenTwoCandidatesAreSignificantBothAreFittedAndThePla
   EXPECT_TRUE(single.result.rounds.front().fits.empty());
 }
 
-// Without noise the loop is unbiased: a planted drag comes back within 1 % (2.974 for 3 at e174dde; with
-// the model's own noise at 0.03, 2.67 on average) and the friction at its truth. Blind passes 9-13 missed 31 of their recovered sizes' intervals, every one toward neutral;
-// this says the bias is not in the fit's structure (surface, response interpolation, re-measurement),
-// and SizeBiasAgainstModelNoise (below) shows where it is.
+// Without noise the loop is unbiased: a planted drag comes back within 1 % (2.974 for 3 at e174dde)
+// and the friction at its truth. Blind passes 9-13 missed 31 of their recovered sizes' intervals,
+// every one toward neutral; this says the cause is not in the fit's structure (surface, response
+// interpolation, re-measurement). With the model's noise, SizeBiasAgainstModelNoise (below) finds a
+// pull of about 3 % over 24 twins (README, "Calibration", limits).
 TEST(CalibrationSynthetic, WithoutNoiseAPlantedDragIsRecoveredWithinOnePercent) {
   const NoiseScope quiet({1e-4, 1e-4});
   TempDir dir("gapflow_calibration_synthetic_noiseless");
@@ -243,7 +254,9 @@ TEST(CalibrationSynthetic, WithoutNoiseAPlantedDragIsRecoveredWithinOnePercent) 
 // simulator's is (trajectories part within a few collisions). Knobs: GAPFLOW_COMMON_NOISE,
 // GAPFLOW_OWN_NOISE (sd on ln J; default 0.005, 0.03), GAPFLOW_OWN_NOISE_IN (all, drag or drag-free:
 // which runs carry the own part; default all), GAPFLOW_MODEL_REPS (model runs per point, default 4),
-// GAPFLOW_SEEDS (twins, default 8). README, "Calibration": the numbers it gave.
+// GAPFLOW_SEEDS (twins, default 8), GAPFLOW_MODEL_SEED (fixed: the calibration's model runs on base
+// seed 1 for every twin, so the twins share one draw of the model's noise; per-twin: seed 100 + the
+// twin's: each twin its own draw of the model's noise, what a bias needs; default per-twin). README, "Calibration": the numbers it gave.
 //   GAPFLOW_SEEDS=3 build/tests/gapflow_tests --gtest_also_run_disabled_tests --gtest_filter='*SizeBias*'
 TEST(CalibrationSynthetic, DISABLED_SizeBiasAgainstModelNoise) {
   const auto knob = [](const char* name, double fallback) {
@@ -258,11 +271,14 @@ TEST(CalibrationSynthetic, DISABLED_SizeBiasAgainstModelNoise) {
                                              : NoiseLevels::OwnIn::drag_free_runs});
   const int reps = static_cast<int>(knob("GAPFLOW_MODEL_REPS", 4));
   const auto seeds = static_cast<std::uint64_t>(knob("GAPFLOW_SEEDS", 8));
-  std::cout << fmt::format("noise common {} own {} ({} runs) on ln J, {} model runs per point\n", g_noise.common,
-                           g_noise.own, own_in, reps);
+  const std::string model_seed = std::getenv("GAPFLOW_MODEL_SEED") ? std::getenv("GAPFLOW_MODEL_SEED") : "per-twin";
+  ASSERT_TRUE(model_seed == "fixed" || model_seed == "per-twin") << "GAPFLOW_MODEL_SEED: fixed or per-twin";
+  std::cout << fmt::format("noise common {} own {} ({} runs) on ln J, {} model runs per point, model seed {}\n",
+                           g_noise.common, g_noise.own, own_in, reps, model_seed);
   for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
     TempDir dir("gapflow_calibration_synthetic_bias");
-    const CalibrationResult r = calibrate_synthetic(dir, {"linear_drag=3"}, 1, 0.3, seed, reps).result;
+    const SyntheticCase c{.twin_seed = seed, .model_replicates = reps, .model_seed = model_seed == "fixed" ? 1 : 100 + seed};
+    const CalibrationResult r = calibrate_synthetic(dir, {"linear_drag=3"}, 1, c).result;
     std::string sizes;
     for (const AddedEffect& e : r.effects) sizes += fmt::format("{} {:.3f} [{:.3f}, {:.3f}] ", e.effect, e.value, e.lo95, e.hi95);
     std::cout << fmt::format("seed {}: {}friction {:.3f}; chi2/nu after {:.2f}\n", seed, sizes, friction(r.after),
