@@ -77,6 +77,8 @@ def contests(summary):
 
 
 VISIBLE_POWER = 0.8  # oracle power above which a planted effect counts as visible in its data
+# cases.csv's truth column for the twins that are not one catalogue effect alone.
+NOT_SINGLE = ("none", "two effects", "outside the catalogue", "3D model")
 
 
 def main(out):
@@ -160,7 +162,7 @@ def main(out):
     # The design the twins were made from (the script records it from pass 10 on; before, the first one).
     design_file = out / "design"
     design = design_file.read_text().strip() if design_file.exists() else "data/blind/design.toml"
-    single = [r for r in rows if r["truth"] not in ("none", "two effects", "outside the catalogue", "3D model")]
+    single = [r for r in rows if r["truth"] not in NOT_SINGLE]
     nulls = [r for r in rows if r["truth"] == "none"]
     outside = [r for r in rows if r["truth"] == "outside the catalogue"]
     two = [r for r in rows if r["truth"] == "two effects"]

@@ -9,8 +9,9 @@ tried when that candidate's adjusted p is below P. Every such round is written i
 report.md as "the residual is consistent with the noise (chi2 p = ...): nothing to explain (best
 candidate NAME: adjusted p = Q)". A calibration is deterministic, so a pass run without the option
 and replayed with it differs only from the first round listed here on; where none is listed, the
-replay's decisions are the pass's own. Prints each round with Q < P and a count per pass; replay
-folders are skipped. Exit 2 on a folder without reports.
+replay's decisions are the pass's own. Prints each round with Q < P and a count per pass. Reads the
+pass's calibrations only (folders with a summary.json; a replay folder's own calibrations lie a
+level deeper). Exit 2 on a folder without calibrations.
 """
 import glob
 import os
@@ -37,9 +38,10 @@ def main():
         sys.exit(2)
     threshold = float(sys.argv[1])
     for pass_dir in sys.argv[2:]:
-        reports = sorted(glob.glob(os.path.join(pass_dir, "*", "report.md")))
+        reports = [os.path.join(os.path.dirname(s), "report.md")
+                   for s in sorted(glob.glob(os.path.join(pass_dir, "*", "summary.json")))]
         if not reports:
-            print(f"error: no calibration reports in {pass_dir}", file=sys.stderr)
+            print(f"error: no calibrations in {pass_dir}", file=sys.stderr)
             sys.exit(2)
         fired, smallest = 0, None
         for report in reports:

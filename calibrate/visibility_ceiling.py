@@ -3,10 +3,11 @@
 
     /usr/bin/python3 calibrate/visibility_ceiling.py results/calibration-blind-pass10 [more passes...]
 
-Reads each pass's cases.csv (calibrate/blind_summary.py) and, over its single-effect twins (every
-catalogue effect alone at a low and a high size), counts: identified (alone or in a reported group
-that holds it), visible to the oracle (power >= 0.8 of a score test that knew the planted
-signature), and identified among the visible. "Ceiling" is visible / singles: the share a loop would
+Reads each pass's cases.csv and, over its single-effect twins (every catalogue effect alone at a
+low and a high size), counts: identified (alone or in a reported group that holds it), visible to
+the oracle (power >= 0.8 of a score test that knew the planted signature), and identified among the
+visible. Which twins are single and which visible is cases.csv's own (its truth and visible columns,
+by calibrate/blind_summary.py), so the counts are the pass report's. "Ceiling" is visible / singles: the share a loop would
 score that finds exactly what the oracle can see and nothing else. The last line pools the passes
 given. Exit 2 on a folder without cases.csv.
 """
@@ -14,11 +15,7 @@ import csv
 import os
 import sys
 
-ORACLE_POWER = 0.8
-
-
-def single_effect(case):
-    return case.endswith(("-high", "-low")) and not case.startswith("two-")
+from blind_summary import NOT_SINGLE
 
 
 def counts(pass_dir):
@@ -27,8 +24,8 @@ def counts(pass_dir):
         print(f"error: no cases.csv in {pass_dir}", file=sys.stderr)
         sys.exit(2)
     with open(path, newline="", encoding="utf-8") as f:
-        singles = [r for r in csv.DictReader(f) if single_effect(r["case"])]
-    visible = [r for r in singles if r["oracle_power"] and float(r["oracle_power"]) >= ORACLE_POWER]
+        singles = [r for r in csv.DictReader(f) if r["truth"] not in NOT_SINGLE]
+    visible = [r for r in singles if r["visible"] == "True"]
     return {
         "singles": len(singles),
         "identified": sum(r["identified"] == "True" for r in singles),

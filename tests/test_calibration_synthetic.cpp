@@ -134,7 +134,6 @@ struct SyntheticRun {
   std::string log;  // every decision of the loop (CalibrationResult::log), one a line
 };
 
-// A twin of the design with the friction at `friction` and `effects` planted, calibrated blind.
 // What a synthetic twin varies besides its effects: the true friction, the twin's seed (its data's
 // noise), and the calibration's model runs per point and base seed (the model's noise).
 struct SyntheticCase {
@@ -144,6 +143,7 @@ struct SyntheticCase {
   std::uint64_t model_seed = 1;
 };
 
+// A twin of the design with `effects` planted (and the case's friction and seeds), calibrated blind.
 SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::string>& effects, int contenders,
                                  const SyntheticCase& c = {}) {
   write_design(dir / "design.toml", c.model_replicates, c.model_seed);
@@ -256,14 +256,19 @@ TEST(CalibrationSynthetic, WithoutNoiseAPlantedDragIsRecoveredWithinOnePercent) 
 // which runs carry the own part; default all), GAPFLOW_MODEL_REPS (model runs per point, default 4),
 // GAPFLOW_SEEDS (twins, default 8), GAPFLOW_MODEL_SEED (fixed: the calibration's model runs on base
 // seed 1 for every twin, so the twins share one draw of the model's noise; per-twin: seed 100 + the
-// twin's: each twin its own draw of the model's noise, what a bias needs; default per-twin). README, "Calibration": the numbers it gave.
+// twin's: each twin its own draw of the model's noise, what a bias needs; default per-twin).
+// README, "Calibration", limits: the numbers it gave.
 //   GAPFLOW_SEEDS=3 build/tests/gapflow_tests --gtest_also_run_disabled_tests --gtest_filter='*SizeBias*'
 TEST(CalibrationSynthetic, DISABLED_SizeBiasAgainstModelNoise) {
   const auto knob = [](const char* name, double fallback) {
     const char* v = std::getenv(name);
     return v ? std::stod(v) : fallback;
   };
-  const std::string own_in = std::getenv("GAPFLOW_OWN_NOISE_IN") ? std::getenv("GAPFLOW_OWN_NOISE_IN") : "all";
+  const auto text_knob = [](const char* name, const char* fallback) {
+    const char* v = std::getenv(name);
+    return std::string(v ? v : fallback);
+  };
+  const std::string own_in = text_knob("GAPFLOW_OWN_NOISE_IN", "all");
   ASSERT_TRUE(own_in == "all" || own_in == "drag" || own_in == "drag-free") << "GAPFLOW_OWN_NOISE_IN: all, drag or drag-free";
   const NoiseScope noise({knob("GAPFLOW_COMMON_NOISE", 0.005), knob("GAPFLOW_OWN_NOISE", 0.03),
                           own_in == "all"    ? NoiseLevels::OwnIn::all
@@ -271,7 +276,7 @@ TEST(CalibrationSynthetic, DISABLED_SizeBiasAgainstModelNoise) {
                                              : NoiseLevels::OwnIn::drag_free_runs});
   const int reps = static_cast<int>(knob("GAPFLOW_MODEL_REPS", 4));
   const auto seeds = static_cast<std::uint64_t>(knob("GAPFLOW_SEEDS", 8));
-  const std::string model_seed = std::getenv("GAPFLOW_MODEL_SEED") ? std::getenv("GAPFLOW_MODEL_SEED") : "per-twin";
+  const std::string model_seed = text_knob("GAPFLOW_MODEL_SEED", "per-twin");
   ASSERT_TRUE(model_seed == "fixed" || model_seed == "per-twin") << "GAPFLOW_MODEL_SEED: fixed or per-twin";
   std::cout << fmt::format("noise common {} own {} ({} runs) on ln J, {} model runs per point, model seed {}\n",
                            g_noise.common, g_noise.own, own_in, reps, model_seed);
