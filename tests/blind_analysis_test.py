@@ -1,0 +1,175 @@
+#!/usr/bin/env python3
+"""The blind study's analysis scripts (calibrate/*.py) on a tiny pass whose answers are known.
+
+A fake pass folder is written from scratch: five twins with their truth/ files and the parts of
+summary.json and report.md the scripts read. Each script is run as a user runs it (a subprocess,
+`/usr/bin/python3 calibrate/X.py ...`) and its counts are compared with what the fixture was made
+to hold. Every assertion fails if a script miscounts: e.g. the visible-but-missed twin, the null
+that got an effect, the interval that misses toward neutral, the round a --decisive-score would try.
+
+    /usr/bin/python3 tests/blind_analysis_test.py
+"""
+import csv
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+from pathlib import Path
+
+CALIBRATE = Path(__file__).resolve().parent.parent / "calibrate"
+
+
+def truth(case, planted, power=None, chi2=None):
+    t = {"twin": case, "model": "2d", "seed": 1, "planted": [
+        {"name": "free", "key": "particles.friction_particle", "value": 0.40, "neutral": None}] + planted}
+    if power is not None:
+        t["signal"] = {"chi2": chi2, "points": 44, "critical": 7.9, "oracle_power": power}
+    return t
+
+
+def errors(chi2, rms):
+    return {"n": 12, "rmse": rms / 10, "rms_whitened": rms, "chi2": chi2, "dof": 12, "p": 0.5, "invalid": 0}
+
+
+def summary(effects, verdict, rms_before=2.0, rms_after=1.0):
+    """The summary.json fields the scripts read; the free parameter fitted to 0.42 (truth 0.40)."""
+    return {
+        "effects": effects, "verdict": verdict, "poor_fit": False, "held_out_beyond_noise": False,
+        "before": {"fitted": errors(88.0, 1.4), "held_out_fresh": errors(48.0, rms_before)},
+        "after": {"params": {"particles.friction_particle": 0.42}, "fitted": errors(43.0, 1.0),
+                  "held_out_fresh": errors(12.0, rms_after)},
+        "rounds": [], "runs_simulated": 1000, "runs_reused": 200, "run_seconds": 600.0, "wall_seconds": 320.0,
+    }
+
+
+def added(effect, key, value, lo, hi, neutral=0.0, group=None):
+    return {"effect": effect, "key": key, "group": group or [effect], "neutral": neutral, "value": value,
+            "lo95": lo, "hi95": hi, "interval_bounded": True}
+
+
+DRAG = {"name": "linear_drag", "key": "particles.drag_per_s", "value": 3.0, "neutral": 0}
+SPIN = {"name": "spinning_friction", "key": "particles.spinning_friction_mm", "value": 0.7, "neutral": 0}
+ROLL = {"name": "rolling_resistance", "key": "particles.rolling_resistance", "value": 0.002, "neutral": 0.001}
+OUTSIDE = {"name": "set", "key": "particles.drag_quadratic_per_m", "value": 4.0, "neutral": 0}
+
+STOPPED = ("Decision: the residual is consistent with the noise (chi2 p = 0.31): nothing to explain "
+           "(best candidate spinning_friction: adjusted p = 0.0002).\n")
+ROUND_TABLE = """### Round 1
+
+| effect | step | visible (p) | left by the fit | score | p | adjusted p | linearised size | group |
+|---|---|---|---|---|---|---|---|---|
+| spinning_friction | 0.5 | yes (0) | 80 % | 30.00 | 1e-07 | 1e-06 | -0.2 ± 0.05 | 0 |
+| gap_offset | 1.5 | yes (0) | 99 % | 5.00 | 0.02 | 0.2 | 0.1 ± 0.05 | 1 |
+"""
+
+# case: (truth, summary, report.md)
+CASES = {
+    # Found, but its interval [2.5, 2.8] misses the planted 3.0 toward neutral; held-out excess 2 -> 1.
+    "drag-low": (truth("drag-low", [DRAG], power=1.0, chi2=170.0),
+                 summary([added("linear_drag", DRAG["key"], 2.6, 2.5, 2.8)], "effect found"), ""),
+    # Visible in its data (power 0.9) and missed: a round stopped with a best adjusted p of 2e-4.
+    "spin-high": (truth("spin-high", [SPIN], power=0.9, chi2=20.0),
+                  summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), STOPPED),
+    # Invisible (power 0.1) and rightly "none".
+    "rolling-low": (truth("rolling-low", [ROLL], power=0.1, chi2=1.0),
+                    summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), ""),
+    # A null twin that got an effect: a false positive. Its best round asked for a spinning
+    # friction below neutral, which the catalogue's range rules out (wrong_direction_rounds).
+    "null-1": (truth("null-1", []),
+               summary([added("gap_offset", "bottleneck.gap_offset_mm", 0.2, 0.1, 0.3)], "effect found"), ROUND_TABLE),
+    # Outside the catalogue: read as nothing.
+    "outside-quadratic-4": (truth("outside-quadratic-4", [OUTSIDE]),
+                            summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), ""),
+}
+
+
+def run(script, *args):
+    done = subprocess.run([sys.executable, str(CALIBRATE / script), *map(str, args)], capture_output=True, text=True)
+    return done.returncode, done.stdout, done.stderr
+
+
+class BlindAnalysis(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        cls.pass_dir = Path(cls.tmp.name) / "pass"
+        (cls.pass_dir / "truth").mkdir(parents=True)
+        for case, (t, s, report) in CASES.items():
+            (cls.pass_dir / "truth" / f"{case}.json").write_text(json.dumps(t))
+            (cls.pass_dir / case).mkdir()
+            (cls.pass_dir / case / "summary.json").write_text(json.dumps(s))
+            # A stopped round's decision stands twice in a real report (round table and log): counted
+            # once. A round table stands once.
+            decisions = "".join(line for line in report.splitlines(True) if line.startswith("Decision:"))
+            (cls.pass_dir / case / "report.md").write_text(report + decisions)
+        code, cls.summary_out, err = run("blind_summary.py", cls.pass_dir)
+        assert code == 0, err
+        with open(cls.pass_dir / "cases.csv", newline="") as f:
+            cls.rows = {r["case"]: r for r in csv.DictReader(f)}
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def test_blind_summary_classifies_each_twin(self):
+        r = self.rows
+        self.assertEqual(r["drag-low"]["truth"], "linear_drag")
+        self.assertEqual(r["drag-low"]["identified"], "True")
+        self.assertEqual(r["drag-low"]["covered"], "False")
+        self.assertEqual(r["spin-high"]["identified"], "False")
+        self.assertEqual(r["spin-high"]["visible"], "True")
+        self.assertEqual(r["rolling-low"]["visible"], "False")
+        self.assertEqual(r["null-1"]["truth"], "none")
+        self.assertEqual(r["null-1"]["said"], "gap_offset")
+        self.assertEqual(r["outside-quadratic-4"]["truth"], "outside the catalogue")
+        self.assertEqual(r["outside-quadratic-4"]["said"], "none")
+        self.assertAlmostEqual(float(r["drag-low"]["free_offset"]), 0.02, places=4)
+
+    def test_blind_summary_report_counts(self):
+        report = (self.pass_dir / "report.md").read_text()
+        self.assertIn("identified (alone, or in a reported group that contains it): 1 of 3 (33 %)", report)
+        self.assertIn("null twins where an effect was added: 1 of 1 (100 %)", report)
+        self.assertIn("contain the planted value: 0 of 1 (0 %)", report)
+        self.assertIn("visible in their data (oracle power >= 0.8): 2 of 3; of these identified: 1 of 2 (50 %)", report)
+        # Excess over the noise sqrt(rms^2 - 1): sqrt(3) = 1.73 before, 0 after, for the one found twin.
+        self.assertIn("that excess summed over those cases: 1.7 -> 0.0", report)
+        self.assertTrue((self.pass_dir / "confusion.png").stat().st_size > 0)
+
+    def test_visibility_ceiling_counts_from_cases_csv(self):
+        code, out, _ = run("visibility_ceiling.py", self.pass_dir, self.pass_dir)
+        self.assertEqual(code, 0)
+        self.assertIn("identified 1 of 3 (33 %); visible 2 (ceiling 67 %); identified among the visible 1 of 2 (50 %)", out)
+        self.assertIn("pooled: identified 2 of 6", out)
+
+    def test_interval_sides_says_toward_neutral(self):
+        code, out, _ = run("interval_sides.py", self.pass_dir)
+        self.assertEqual(code, 0)
+        self.assertIn("0 intervals hold the planted value; missed toward neutral 1, away from it 0", out)
+        self.assertIn("toward: drag-low (particles.drag_per_s 2.6 for 3)", out)
+
+    def test_decisive_rounds_finds_the_stopped_round_once(self):
+        code, out, _ = run("decisive_rounds.py", "1e-3", self.pass_dir)
+        self.assertEqual(code, 0)
+        self.assertIn("spin-high: chi2 p 0.31, spinning_friction adjusted p 0.0002 < 0.001", out)
+        self.assertIn("1 round(s) the option would try; smallest best adjusted p in a stopped round: 0.0002", out)
+        code, out, _ = run("decisive_rounds.py", "1e-4", self.pass_dir)
+        self.assertIn("0 round(s) the option would try", out)
+
+    def test_wrong_direction_rounds_lists_the_impossible_size(self):
+        code, out, _ = run("wrong_direction_rounds.py", self.pass_dir)
+        self.assertEqual(code, 0)
+        self.assertIn("null-1", out)
+        self.assertIn("spinning_friction", out)
+        self.assertIn("1 round(s)", out)
+
+    def test_missing_folder_is_exit_2(self):
+        empty = Path(self.tmp.name) / "empty"
+        empty.mkdir(exist_ok=True)
+        self.assertEqual(run("visibility_ceiling.py", empty)[0], 2)
+        self.assertEqual(run("decisive_rounds.py", "1e-4", empty)[0], 2)
+
+
+if __name__ == "__main__":
+    unittest.main()
