@@ -84,12 +84,11 @@ ParameterSet without_planted_effects(const DataFile& design, const TwinTruth& tr
 }
 
 // The noise a calibration of the twin sees at point i, on the fit scale: the twin
-// file's se (with the design's floor) and the model's at the design's replicate count,
-// from a standard error `se` of the mean of def.replicates runs.
-double calibration_sigma(const DataFile& design, const TwinDef& def, const Prediction& with, std::size_t i, double se) {
+// file's se (a standard error `se` of the mean of def.replicates runs, with the design's
+// floor) and the model's as the loop sees it, `model_se` (loop_model_se).
+double calibration_sigma(const DataFile& design, const Prediction& with, std::size_t i, double se, double model_se) {
   const double floor = design.floor_relative * (design.points[i].scale == FitScale::log ? 1.0 : std::abs(with.value[i]));
-  const double model_share = static_cast<double>(def.replicates) / design.model_replicates;
-  return std::hypot(std::hypot(se, floor), se * std::sqrt(model_share));
+  return std::hypot(std::hypot(se, floor), model_se);
 }
 
 // The run-to-run standard error at each point from the model's runs at every grid node
@@ -172,9 +171,19 @@ PlantedSignal planted_signal(const DataFile& design, const TwinDef& def, const T
     sets.push_back(without);
   }
   const std::vector<Prediction> p = ev.evaluate(sets, truth.model_seed, def.replicates);
-  std::vector<double> chi2;
   const std::vector<double> se = pooled_se(p, design.points.size());
-  for (const Prediction& q : p) chi2.push_back(planted_noncentrality(design, def, with, q, se));
+  const auto noncentralities = [&](const std::vector<double>& model_se) {
+    std::vector<double> out;
+    for (const Prediction& q : p) out.push_back(planted_noncentrality(design, with, q, se, model_se));
+    return out;
+  };
+  // The loop's model noise depends on where its surface is centred: centre it on the node
+  // nearest the refit that a raw model noise gives, then refit with the loop's noise.
+  std::vector<double> chi2 = noncentralities(raw_model_se(design, def, se));
+  if (design.free.size() == 1) {
+    const auto near = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
+    chi2 = noncentralities(loop_model_se(design, def, sets, p, near));
+  }
   // A measured free parameter is a datum of the calibration's refit: the oracle's refit pays for
   // moving it away from its true value (where the reading lies in expectation) as the loop pays
   // for moving it from the reading.
@@ -225,18 +234,48 @@ double option_number(const std::string& text, const std::string& option) {
 // barely feels gives ~0 here, not n_points x the decorrelation noise).
 // Infinite where the model without the effects gives no value at some point (a node
 // that cannot be compared, rather than a made-up penalty the refinement would bend to).
-double planted_noncentrality(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without,
-                             const std::vector<double>& se) {
+double planted_noncentrality(const DataFile& design, const Prediction& with, const Prediction& without,
+                             const std::vector<double>& se, const std::vector<double>& model_se) {
   double chi2 = 0;
   for (std::size_t i = 0; i < design.points.size(); ++i) {
     if (design.points[i].held_out || !with.valid[i]) continue;
     if (!without.valid[i]) return std::numeric_limits<double>::infinity();
     const double d = with.fit[i] - without.fit[i];
-    const double sigma = calibration_sigma(design, def, with, i, se[i]);
+    const double sigma = calibration_sigma(design, with, i, se[i], model_se[i]);
     if (!(sigma > 0)) continue;  // no noise and no floor: nothing to measure the difference in
     chi2 += (d * d - paired_difference_variance(with, without, i)) / (sigma * sigma);
   }
   return chi2;  // below 0 where the noise outweighs the signal: the caller clamps after smoothing
+}
+
+// The model's part of the noise as a raw grid node shows it: the standard error of a mean of
+// the design's model replicates, from `se` (a mean of def.replicates runs).
+std::vector<double> raw_model_se(const DataFile& design, const TwinDef& def, const std::vector<double>& se) {
+  const double model_share = static_cast<double>(def.replicates) / design.model_replicates;
+  std::vector<double> out;
+  for (double s : se) out.push_back(s * std::sqrt(model_share));
+  return out;
+}
+
+// The model's part of the noise as the loop sees it. The loop does not compare the data with a
+// raw grid node: its fit, its residual and its score test all use the response surface through
+// the five nodes around the fit (fit.cpp, surface_around), a least-squares quadratic whose
+// prediction is less noisy than any one node (at the middle of five nodes of equal noise, by
+// sqrt(17/35)), and whose noise is what it whitens with. Before, the oracle took the raw node's
+// noise and so understated what the loop sees (passes 8-14: the loop's baseline chi^2 beyond its
+// degrees of freedom ran ~1.5 x the oracle's lambda; README, Calibration). The same surface is
+// built here from the oracle's nodes (def.replicates runs each) around node `near`, and its
+// standard error scaled to the design's model replicates.
+std::vector<double> loop_model_se(const DataFile& design, const TwinDef& def, const std::vector<ParameterSet>& nodes,
+                                  const std::vector<Prediction>& predictions, std::size_t near) {
+  BaselineFit grid;
+  grid.grid = nodes;
+  grid.grid_predictions = predictions;
+  const Prediction at = surface_around(design, grid, nodes[near]).predict_fit(nodes[near]);
+  const double model_share = static_cast<double>(def.replicates) / design.model_replicates;
+  std::vector<double> out;
+  for (double s : at.se_fit) out.push_back(s * std::sqrt(model_share));
+  return out;
 }
 
 TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {

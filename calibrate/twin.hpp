@@ -58,10 +58,19 @@ struct TwinTruth {
 // The planted effects' noncentrality over the design's fitted points: the squared
 // difference between `with` and `without` (same seeds) in units of the noise a calibration
 // of the twin sees, built from `se` (per point: the run-to-run standard error of a mean of
-// def.replicates runs, estimated independently of this pair), less the paired runs' own
-// noise (calibrate/twin.cpp says why). Below 0 where the noise outweighs the signal.
-double planted_noncentrality(const DataFile& design, const TwinDef& def, const Prediction& with, const Prediction& without,
-                             const std::vector<double>& se);
+// def.replicates runs, estimated independently of this pair) and `model_se` (the model's part,
+// loop_model_se), less the paired runs' own noise (calibrate/twin.cpp says why). Below 0 where
+// the noise outweighs the signal.
+double planted_noncentrality(const DataFile& design, const Prediction& with, const Prediction& without,
+                             const std::vector<double>& se, const std::vector<double>& model_se);
+
+// Per point, the model's standard error on the fit scale at the design's model replicates,
+// from `se` (a mean of def.replicates runs): as one raw grid node has it, ...
+std::vector<double> raw_model_se(const DataFile& design, const TwinDef& def, const std::vector<double>& se);
+// ... and as the loop sees it: the response surface through the grid's nodes around node
+// `near` (fit.hpp, surface_around), built from `predictions` (def.replicates runs each).
+std::vector<double> loop_model_se(const DataFile& design, const TwinDef& def, const std::vector<ParameterSet>& nodes,
+                                  const std::vector<Prediction>& predictions, std::size_t near);
 
 // The planted values (drawn from def.seed), without running anything.
 TwinTruth draw_twin(const DataFile& design, const TwinDef& def);

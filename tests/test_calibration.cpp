@@ -399,7 +399,8 @@ TEST(Twin, PlantedNoncentralityRemovesTheNoiseOfUnpairedRuns) {
           with[i].push_back(std::log(50.0) + delta + tau * rng.normal());
           without[i].push_back(std::log(50.0) + tau * rng.normal());
         }
-      mean += planted_noncentrality(design, def, prediction(with), prediction(without), se) / trials;
+      mean += planted_noncentrality(design, prediction(with), prediction(without), se, raw_model_se(design, def, se)) /
+              trials;
     }
     double truth = 0;  // the floor is relative on a linear scale (value ~50 here): those points see ~nothing
     for (const DataPoint& q : design.points) {
@@ -411,6 +412,40 @@ TEST(Twin, PlantedNoncentralityRemovesTheNoiseOfUnpairedRuns) {
       EXPECT_NEAR(mean, 0.0, 0.6) << "noise counted as signal";
     else
       EXPECT_NEAR(mean, truth, 0.06 * truth);
+  }
+}
+
+// The oracle's model noise is the loop's: the response surface's through five grid nodes, not a
+// raw node's. Analytic: a least-squares quadratic through 5 equally spaced nodes of equal noise s
+// predicts with variance s^2 x^T (X^T X)^-1 x, 17/35 s^2 at the middle node and 31/35 s^2 at an
+// end one; the surface follows an exact quadratic without lack of fit, so nothing widens it.
+TEST(Twin, LoopModelNoiseIsTheSurfacesNotARawNodes) {
+  const DataFile design = load_data_file(source_path("data/blind/design_v2.toml"));
+  ASSERT_EQ(design.free.size(), 1u);
+  TwinDef def;
+  def.replicates = 10;
+  const double s = 0.01;  // each node's se on the fit scale (a mean of def.replicates runs)
+  std::vector<ParameterSet> nodes;
+  std::vector<Prediction> predictions;
+  for (int k = 0; k < 9; ++k) {
+    const double f = 0.1 + 0.05 * k;
+    nodes.push_back(ParameterSet{}.with(design.free.front().key, f));
+    Prediction p;
+    for (std::size_t i = 0; i < design.points.size(); ++i) {
+      const double y = 1.0 + 0.1 * static_cast<double>(i) + 2.0 * f - 3.0 * f * f;
+      p.fit.push_back(y), p.value.push_back(y), p.se_fit.push_back(s), p.valid.push_back(true);
+      p.replicate_fit.emplace_back();
+    }
+    predictions.push_back(p);
+  }
+  const double to_model = std::sqrt(10.0 / design.model_replicates);  // a mean of the loop's runs
+  const std::vector<double> middle = loop_model_se(design, def, nodes, predictions, 4);
+  const std::vector<double> end = loop_model_se(design, def, nodes, predictions, 0);
+  const std::vector<double> raw = raw_model_se(design, def, std::vector<double>(design.points.size(), s));
+  for (std::size_t i = 0; i < design.points.size(); ++i) {
+    EXPECT_NEAR(raw[i], s * to_model, 1e-12);
+    EXPECT_NEAR(middle[i], s * to_model * std::sqrt(17.0 / 35.0), 1e-9) << "point " << i;
+    EXPECT_NEAR(end[i], s * to_model * std::sqrt(31.0 / 35.0), 1e-9) << "point " << i;
   }
 }
 

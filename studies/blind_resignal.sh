@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Recompute the oracle's signal (truth/<id>.json "signal": lambda and oracle power) of a finished
+# blind pass's twins with the current gapflow, without touching the pass.
+#
+#   studies/blind_resignal.sh PASS OUT [STORE] [JOBS]
+#
+# PASS is a pass folder made by studies/calibration_blind.sh (its seed_offset, design, twins/ and
+# truth/). Each twin with planted effects is made again, as the pass made it, into OUT/twins and
+# OUT/truth; STORE (default PASS/twin_runs.sqlite, which is not committed) holds the pass's twin
+# runs, so a twin whose runs are all there costs no simulation (without it everything is run
+# again: minutes per twin). The remade data file must equal the pass's (the scenario line aside,
+# which a committed pass rewrites): else the twins differ and the script stops with exit 1.
+# Then `calibrate/oracle_scale.py PASS --new OUT` compares the old and the new lambda with the loop's
+# own view of each twin. The cases and their seeds are read from studies/calibration_blind.sh.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if [[ $# -lt 2 ]]; then
+  echo "usage: studies/blind_resignal.sh PASS OUT [STORE] [JOBS]" >&2
+  exit 2
+fi
+pass=$1
+out=$2
+store=${3:-$pass/twin_runs.sqlite}
+jobs=${4:-$(nproc)}
+gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
+for f in seed_offset design; do
+  [[ -f $pass/$f ]] || { echo "error: $pass/$f missing: not a blind pass folder" >&2; exit 2; }
+done
+[[ -f $store ]] || echo "note: no store $store: every twin is simulated again" >&2
+seed_offset=$(cat "$pass/seed_offset")
+design=$(cat "$pass/design")
+mkdir -p "$out/twins" "$out/truth"
+# The case table of calibration_blind.sh: the lines between `cases="` and the closing quote.
+sed -n '/^cases="$/,/^"$/p' studies/calibration_blind.sh | sed '1d;$d' |
+while read -r id model seed planted; do
+  [[ -n $id && -n $planted && -f $pass/twins/$id.toml ]] || continue
+  args=()
+  for p in $planted; do
+    case "$p" in
+      effect:*) args+=(--effect "${p#effect:}") ;;
+      set:*) args+=(--set "${p#set:}") ;;
+    esac
+  done
+  if [[ ! -f $out/truth/$id.json ]]; then
+    echo "== twin $id" >&2
+    "$gapflow" twin "$design" --out "$out/twins/$id.toml" --truth "$out/truth/$id.json.part" --model "$model" \
+      --seed $((seed + seed_offset)) --replicates 10 --name "$id" --jobs "$jobs" --db "$store" "${args[@]}" >&2
+    if ! diff <(grep -v '^scenario = ' "$pass/twins/$id.toml") <(grep -v '^scenario = ' "$out/twins/$id.toml") > /dev/null; then
+      echo "error: the remade $id differs from $pass/twins/$id.toml: not the pass's twin" >&2
+      exit 1
+    fi
+    mv "$out/truth/$id.json.part" "$out/truth/$id.json"
+  fi
+done
+/usr/bin/python3 calibrate/oracle_scale.py "$pass" --new "$out"
