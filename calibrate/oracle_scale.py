@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Does the oracle's signal (truth "signal": lambda) measure what the loop sees?
 
-    /usr/bin/python3 calibrate/oracle_scale.py PASS [PASS...] [--new RESIGNAL_OUT]
+    /usr/bin/python3 calibrate/oracle_scale.py PASS [PASS...] [--new RESIGNAL_OUT] [--remade SUB]
 
 For every 2D twin of the passes, lambda (the chi^2 its planted effects add beyond what the free
 parameter absorbs, in noise units; gapflow twin) is set against the loop's own view of the same
@@ -14,7 +14,9 @@ and the median of the twins' own ratios). With --new (one pass), the same with t
 lambdas of RESIGNAL_OUT/truth (studies/blind_resignal.sh: the twins made again by another
 gapflow). Each block ends with the single effects identified (PASS/cases.csv), visible
 (oracle power >= 0.8: the ceiling calibrate/visibility_ceiling.py reports) and identified among
-the visible, under that block's lambda; with --new, a line per twin follows.
+the visible, under that block's lambda; with --new, a line per twin follows. With --remade SUB
+(any number of passes), a second block pools the passes with each twin's lambda taken from
+PASS/SUB/truth where it was remade there, and from the pass's own truth elsewhere.
 Exit 2 on a folder without calibrations.
 """
 import csv
@@ -58,6 +60,8 @@ def twins(pass_dir, truth_dir=None):
         with open(summary_file) as f:
             fitted = json.load(f)["before"]["fitted"]
         signal = truth.get("signal")
+        if planted and not signal:
+            continue  # a planted effect without a measured signal: nothing to compare
         single = len(planted) == 1 and planted[0]["name"] != "set"
         out.append((case, signal["chi2"] if signal else 0.0, signal["oracle_power"] if signal else None,
                     fitted["chi2"] - fitted["dof"], single, identified.get(case) == "True"))
@@ -101,7 +105,14 @@ def report(label, rows):
 
 def main():
     args = sys.argv[1:]
-    new = None
+    new = remade_sub = None
+    if "--remade" in args:
+        k = args.index("--remade")
+        if k + 1 >= len(args):
+            print("error: --remade needs a subfolder name", file=sys.stderr)
+            sys.exit(2)
+        remade_sub = args[k + 1]
+        del args[k:k + 2]
     if "--new" in args:
         k = args.index("--new")
         if k + 1 >= len(args):
@@ -120,6 +131,15 @@ def main():
             sys.exit(2)
         rows += r
     report("the passes' own lambda" if not new else f"{args[0]}: its own lambda", rows)
+    if remade_sub:
+        # Each pass's remade truths where there are any (the others keep their own lambda).
+        pooled = []
+        for pass_dir in args:
+            sub = os.path.join(pass_dir, remade_sub, "truth")
+            done = {os.path.basename(f)[:-5] for f in glob.glob(os.path.join(sub, "*.json"))}
+            # twins(pass_dir, sub) holds the remade twins and those without a planted effect.
+            pooled += twins(pass_dir, sub) + [r for r in twins(pass_dir) if r[0] not in done and r[2] is not None]
+        report(f"the same passes, lambda of PASS/{remade_sub}/truth where remade", pooled)
     if new:
         remade = twins(args[0], os.path.join(new, "truth"))
         done = {r[0] for r in remade}

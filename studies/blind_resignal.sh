@@ -2,7 +2,7 @@
 # Recompute the oracle's signal (truth/<id>.json "signal": lambda and oracle power) of a finished
 # blind pass's twins with the current gapflow, without touching the pass.
 #
-#   studies/blind_resignal.sh PASS OUT [STORE] [JOBS]
+#   studies/blind_resignal.sh PASS OUT [STORE] [JOBS] [CASE...]
 #
 # PASS is a pass folder made by studies/calibration_blind.sh (its seed_offset, design, twins/ and
 # truth/). Each twin with planted effects is made again, as the pass made it, into OUT/twins and
@@ -11,17 +11,19 @@
 # again: minutes per twin). The remade data file must equal the pass's (the scenario line aside,
 # which a committed pass rewrites): else the twins differ and the script stops with exit 1.
 # Then `calibrate/oracle_scale.py PASS --new OUT` compares the old and the new lambda with the loop's
-# own view of each twin. The cases and their seeds are read from studies/calibration_blind.sh.
+# own view of each twin. The cases and their seeds are read from studies/calibration_blind.sh;
+# CASE... limits the remaking to those twins (the comparison then covers the ones remade).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [[ $# -lt 2 ]]; then
-  echo "usage: studies/blind_resignal.sh PASS OUT [STORE] [JOBS]" >&2
+  echo "usage: studies/blind_resignal.sh PASS OUT [STORE] [JOBS] [CASE...]" >&2
   exit 2
 fi
 pass=$1
 out=$2
 store=${3:-$pass/twin_runs.sqlite}
 jobs=${4:-$(nproc)}
+only=" ${*:5} "
 gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 for f in seed_offset design; do
   [[ -f $pass/$f ]] || { echo "error: $pass/$f missing: not a blind pass folder" >&2; exit 2; }
@@ -34,6 +36,7 @@ mkdir -p "$out/twins" "$out/truth"
 sed -n '/^cases="$/,/^"$/p' studies/calibration_blind.sh | sed '1d;$d' |
 while read -r id model seed planted; do
   [[ -n $id && -n $planted && -f $pass/twins/$id.toml ]] || continue
+  [[ $only == "  " || $only == *" $id "* ]] || continue
   args=()
   for p in $planted; do
     case "$p" in

@@ -33,11 +33,12 @@ def errors(chi2, rms):
     return {"n": 12, "rmse": rms / 10, "rms_whitened": rms, "chi2": chi2, "dof": 12, "p": 0.5, "invalid": 0}
 
 
-def summary(effects, verdict, rms_before=2.0, rms_after=1.0):
+def summary(effects, verdict, rms_before=2.0, rms_after=1.0, fitted_chi2=88.0):
     """The summary.json fields the scripts read; the free parameter fitted to 0.42 (truth 0.40)."""
+    fitted = {**errors(fitted_chi2, 1.4), "dof": 43}
     return {
         "effects": effects, "verdict": verdict, "poor_fit": False, "held_out_beyond_noise": False,
-        "before": {"fitted": errors(88.0, 1.4), "held_out_fresh": errors(48.0, rms_before)},
+        "before": {"fitted": fitted, "held_out_fresh": errors(48.0, rms_before)},
         "after": {"params": {"particles.friction_particle": 0.42}, "fitted": errors(43.0, 1.0),
                   "held_out_fresh": errors(12.0, rms_after)},
         "rounds": [], "runs_simulated": 1000, "runs_reused": 200, "run_seconds": 600.0, "wall_seconds": 320.0,
@@ -68,19 +69,20 @@ ROUND_TABLE = """### Round 1
 CASES = {
     # Found, but its interval [2.5, 2.8] misses the planted 3.0 toward neutral; held-out excess 2 -> 1.
     "drag-low": (truth("drag-low", [DRAG], power=1.0, chi2=170.0),
-                 summary([added("linear_drag", DRAG["key"], 2.6, 2.5, 2.8)], "effect found"), ""),
+                 summary([added("linear_drag", DRAG["key"], 2.6, 2.5, 2.8)], "effect found", fitted_chi2=215.0), ""),
     # Visible in its data (power 0.9) and missed: a round stopped with a best adjusted p of 2e-4.
     "spin-high": (truth("spin-high", [SPIN], power=0.9, chi2=20.0),
-                  summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), STOPPED),
+                  summary([], "consistent with noise", rms_before=1.0, rms_after=1.0, fitted_chi2=65.0), STOPPED),
     # Invisible (power 0.1) and rightly "none".
     "rolling-low": (truth("rolling-low", [ROLL], power=0.1, chi2=1.0),
                     summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), ""),
     # A null twin that got an effect: a false positive. Its best round asked for a spinning
     # friction below neutral, which the catalogue's range rules out (wrong_direction_rounds).
     "null-1": (truth("null-1", []),
-               summary([added("gap_offset", "bottleneck.gap_offset_mm", 0.2, 0.1, 0.3)], "effect found"), ROUND_TABLE),
+               summary([added("gap_offset", "bottleneck.gap_offset_mm", 0.2, 0.1, 0.3)], "effect found", fitted_chi2=45.0),
+               ROUND_TABLE),
     # Outside the catalogue: read as nothing.
-    "outside-quadratic-4": (truth("outside-quadratic-4", [OUTSIDE]),
+    "outside-quadratic-4": (truth("outside-quadratic-4", [OUTSIDE], power=0.05, chi2=1.0),
                             summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), ""),
 }
 
@@ -164,11 +166,32 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("spinning_friction", out)
         self.assertIn("1 round(s)", out)
 
+    def test_oracle_scale_sets_lambda_against_the_loops_excess(self):
+        # Baseline excess chi2 - 43: null-1 +2; drag-low +172 for lambda 170; spin-high +22 for lambda 20.
+        remade = Path(self.tmp.name) / "remade"
+        (remade / "truth").mkdir(parents=True, exist_ok=True)
+        (remade / "truth" / "spin-high.json").write_text(json.dumps(truth("spin-high", [SPIN], power=0.5, chi2=10.0)))
+        code, out, err = run("oracle_scale.py", self.pass_dir, "--new", remade)
+        self.assertEqual(code, 0, err)
+        own, new = out.split("the same twins")[:2]
+        self.assertIn("without a planted effect (1): mean excess 2.0", own)
+        # (172 - 2) / 170 = 1.00 and (22 - 2) / 20 = 1.00 with the pass's lambda ...
+        self.assertIn("lambda >= 10 (2 twins): (excess - nulls' mean) / lambda, summed 1.00, median per twin 1.00", own)
+        self.assertIn("identified 1 of 3; visible (oracle power >= 0.8) 2 of 3 (the ceiling); identified among the "
+                      "visible 1 of 2", own)
+        # ... and spin-high's remade lambda 10 gives (22 - 2) / 10 = 2.00; it is no longer visible.
+        self.assertIn("lambda >= 10 (1 twins): (excess - nulls' mean) / lambda, summed 2.00", new)
+        self.assertIn("visible (oracle power >= 0.8) 0 of 1 (the ceiling)", new)
+        self.assertIn("spin-high: 20.0 (0.90) -> 10.0 (0.50); excess 22.0", out)
+        code, out, _ = run("oracle_scale.py", self.pass_dir, "--remade", "../remade")
+        self.assertIn("visible (oracle power >= 0.8) 1 of 3 (the ceiling)", out.split("where remade")[1])
+
     def test_missing_folder_is_exit_2(self):
         empty = Path(self.tmp.name) / "empty"
         empty.mkdir(exist_ok=True)
         self.assertEqual(run("visibility_ceiling.py", empty)[0], 2)
         self.assertEqual(run("decisive_rounds.py", "1e-4", empty)[0], 2)
+        self.assertEqual(run("oracle_scale.py", empty)[0], 2)
 
 
 if __name__ == "__main__":
