@@ -103,25 +103,26 @@ def report(label, rows):
           f"{len(visible)} of {len(singles)} (the ceiling); identified among the visible {found_visible} of {len(visible)}")
 
 
+def take_option(args, name, what):
+    """The value after `name` in args (both removed), or None; exit 2 where the value is missing."""
+    if name not in args:
+        return None
+    k = args.index(name)
+    if k + 1 >= len(args):
+        print(f"error: {name} needs {what}", file=sys.stderr)
+        sys.exit(2)
+    value = args[k + 1]
+    del args[k:k + 2]
+    return value
+
+
 def main():
     args = sys.argv[1:]
-    new = remade_sub = None
-    if "--remade" in args:
-        k = args.index("--remade")
-        if k + 1 >= len(args):
-            print("error: --remade needs a subfolder name", file=sys.stderr)
-            sys.exit(2)
-        remade_sub = args[k + 1]
-        del args[k:k + 2]
-    if "--new" in args:
-        k = args.index("--new")
-        if k + 1 >= len(args):
-            print("error: --new needs a folder", file=sys.stderr)
-            sys.exit(2)
-        new = args[k + 1]
-        del args[k:k + 2]
+    remade_sub = take_option(args, "--remade", "a subfolder name")
+    new = take_option(args, "--new", "a folder")
     if not args or (new and len(args) != 1):
-        print("usage: oracle_scale.py PASS [PASS...] [--new RESIGNAL_OUT] (--new with one pass)", file=sys.stderr)
+        print("usage: oracle_scale.py PASS [PASS...] [--new RESIGNAL_OUT] [--remade SUB] (--new with one pass)",
+              file=sys.stderr)
         sys.exit(2)
     rows = []
     for pass_dir in args:
