@@ -263,7 +263,7 @@ std::vector<double> raw_model_se(const DataFile& design, const TwinDef& def, con
 // prediction is less noisy than any one node (at the middle of five nodes of equal noise, by
 // sqrt(17/35)), and whose noise is what it whitens with. Before, the oracle took the raw node's
 // noise and so understated what the loop sees (passes 8-14: the loop's baseline chi^2 beyond its
-// degrees of freedom ran ~1.5 x the oracle's lambda; README, Calibration). The same surface is
+// degrees of freedom ran 1.29 x the oracle's lambda, median over 114 twins; README, Calibration). The same surface is
 // built here from the oracle's nodes (def.replicates runs each) around node `near`, and its
 // standard error scaled to the design's model replicates.
 std::vector<double> loop_model_se(const DataFile& design, const TwinDef& def, const std::vector<ParameterSet>& nodes,
