@@ -98,6 +98,17 @@ std::vector<std::string> dump(const fs::path& db_file) {
   return rows;
 }
 
+// The rows only one of two sorted dumps has (a readable failure message instead of two dumps).
+std::string dump_difference(const std::vector<std::string>& a, const std::vector<std::string>& b) {
+  std::vector<std::string> only_a, only_b;
+  std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(only_a));
+  std::set_difference(b.begin(), b.end(), a.begin(), a.end(), std::back_inserter(only_b));
+  std::string text;
+  for (std::size_t k = 0; k < std::min<std::size_t>(only_a.size(), 5); ++k) text += "\n  only in the first: " + only_a[k];
+  for (std::size_t k = 0; k < std::min<std::size_t>(only_b.size(), 5); ++k) text += "\n  only in the second: " + only_b[k];
+  return fmt::format("{} row(s) only in the first, {} only in the second{}", only_a.size(), only_b.size(), text);
+}
+
 // Number of rows of `runs`, or -1 while the file or table does not exist yet.
 int stored_runs(const fs::path& db_file) {
   if (!fs::exists(db_file)) return -1;
@@ -770,7 +781,7 @@ TEST(StudyRunner, ResumeAfterKill9EqualsAnUninterruptedRun) {
   run_tiny(dir / "reference.sqlite", 2);
   const auto resumed = dump(killed), reference = dump(dir / "reference.sqlite");
   EXPECT_EQ(resumed.size(), reference.size());
-  EXPECT_EQ(resumed, reference);
+  EXPECT_TRUE(resumed == reference) << "resumed vs uninterrupted: " << dump_difference(resumed, reference);
   std::set<std::string> keys;
   for (const StoredRun& r : Store(killed).load()) EXPECT_TRUE(keys.insert(r.id.key).second) << r.id.key;
   EXPECT_EQ(keys.size(), 12u);
