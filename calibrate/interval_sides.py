@@ -6,49 +6,87 @@
 For every planted effect that a calibration added (any twin of the pass), its interval either
 holds the planted value, or misses it toward the effect's neutral value (the fitted size is
 nearer neutral than the truth) or away from it. A fit without bias misses on both sides about
-equally often.
+equally often. Each miss also says how far the fit left the free parameter from its measurement
+(in the measurement's standard errors, 0.04 in the blind designs), and the last lines compare that
+distance between the intervals that held and those that missed, over all passes given.
 """
 import glob
 import json
 import os
+import statistics
 import sys
 
 
+MEASURED_SE = 0.04  # the blind designs' measured friction: +- 0.04 (data/blind/design_v2.toml)
+
+
+def friction_sigmas(truth, summary):
+    """How far the fit left the free parameter from its measurement, in the measurement's standard
+    errors (None where the twin carries no measurement)."""
+    measured = truth.get("measured", {})
+    for key, value in measured.items():
+        fitted = summary["after"]["params"].get(key)
+        if fitted is not None and value is not None:
+            return (fitted - value) / MEASURED_SE
+    return None
+
+
 def sides(pass_dir):
+    """(intervals holding the truth, misses toward neutral, misses away), each miss a line, and the free
+    parameter's distance from its measurement (in its standard errors) for each interval, by side."""
     covered, toward, away = 0, [], []
+    far = {"covered": [], "toward": [], "away": []}
     for summary in sorted(glob.glob(os.path.join(pass_dir, "*", "summary.json"))):
         case = os.path.basename(os.path.dirname(summary))
         truth_file = os.path.join(pass_dir, "truth", case + ".json")
         if not os.path.exists(truth_file):
             continue
         with open(truth_file) as f:
-            truth = {p["key"]: (p["value"], p["neutral"]) for p in json.load(f)["planted"] if p["name"] != "free"}
+            truth_json = json.load(f)
+        truth = {p["key"]: (p["value"], p["neutral"]) for p in truth_json["planted"] if p["name"] != "free"}
         with open(summary) as f:
-            effects = json.load(f)["effects"]
-        for e in effects:
+            summary_json = json.load(f)
+        sigmas = friction_sigmas(truth_json, summary_json)
+        note = f"; free parameter {sigmas:+.1f} se from its measurement" if sigmas is not None else ""
+        for e in summary_json["effects"]:
             if e["key"] not in truth:
                 continue
             value, neutral = truth[e["key"]]
             if e["lo95"] <= value <= e["hi95"]:
                 covered += 1
+                side = "covered"
             elif abs(e["value"] - neutral) < abs(value - neutral):
-                toward.append(f"{case} ({e['key']} {e['value']:.4g} for {value:.4g})")
+                toward.append(f"{case} ({e['key']} {e['value']:.4g} for {value:.4g}{note})")
+                side = "toward"
             else:
-                away.append(f"{case} ({e['key']} {e['value']:.4g} for {value:.4g})")
-    return covered, toward, away
+                away.append(f"{case} ({e['key']} {e['value']:.4g} for {value:.4g}{note})")
+                side = "away"
+            if sigmas is not None:
+                far[side].append(sigmas)
+    return covered, toward, away, far
 
 
 def main():
     if len(sys.argv) < 2:
         sys.exit("usage: interval_sides.py PASS_DIR [PASS_DIR...]")
+    pooled = {"covered": [], "toward": [], "away": []}
     for pass_dir in sys.argv[1:]:
-        covered, toward, away = sides(pass_dir)
+        covered, toward, away, far = sides(pass_dir)
         print(f"{pass_dir}: {covered} intervals hold the planted value; missed toward neutral {len(toward)}, "
               f"away from it {len(away)}")
         for line in toward:
             print(f"  toward: {line}")
         for line in away:
             print(f"  away: {line}")
+        for side in pooled:
+            pooled[side] += far[side]
+    # Is a miss the fit's free parameter straying from its measurement (a missing effect pulls it away,
+    # and the effect's joint fit starts there)? Compare the misses with the intervals that held.
+    for side, values in pooled.items():
+        if values:
+            beyond = sum(1 for v in values if abs(v) > 2)
+            print(f"{side}: {len(values)} interval(s); free parameter more than 2 se from its measurement in "
+                  f"{beyond}; median |distance| {statistics.median(abs(v) for v in values):.2f} se")
 
 
 if __name__ == "__main__":

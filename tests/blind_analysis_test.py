@@ -23,7 +23,8 @@ CALIBRATE = Path(__file__).resolve().parent.parent / "calibrate"
 
 def truth(case, planted, power=None, chi2=None):
     t = {"twin": case, "model": "2d", "seed": 1, "planted": [
-        {"name": "free", "key": "particles.friction_particle", "value": 0.40, "neutral": None}] + planted}
+        {"name": "free", "key": "particles.friction_particle", "value": 0.40, "neutral": None}] + planted,
+         "measured": {"particles.friction_particle": 0.38}}
     if power is not None:
         t["signal"] = {"chi2": chi2, "points": 44, "critical": 7.9, "oracle_power": power}
     return t
@@ -149,7 +150,10 @@ class BlindAnalysis(unittest.TestCase):
         code, out, _ = run("interval_sides.py", self.pass_dir)
         self.assertEqual(code, 0)
         self.assertIn("0 intervals hold the planted value; missed toward neutral 1, away from it 0", out)
-        self.assertIn("toward: drag-low (particles.drag_per_s 2.6 for 3)", out)
+        # The fit left the friction at 0.42, its measurement 0.38 +- 0.04: +1.0 se.
+        self.assertIn("toward: drag-low (particles.drag_per_s 2.6 for 3; free parameter +1.0 se from its measurement)", out)
+        self.assertIn("toward: 1 interval(s); free parameter more than 2 se from its measurement in 0; "
+                      "median |distance| 1.00 se", out)
 
     def test_decisive_rounds_finds_the_stopped_round_once(self):
         code, out, _ = run("decisive_rounds.py", "1e-3", self.pass_dir)
