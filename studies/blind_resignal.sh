@@ -11,7 +11,7 @@
 # again: minutes per twin). The remade data file must equal the pass's (the scenario line aside,
 # which a committed pass rewrites): else the twins differ and the script stops with exit 1.
 # Then `calibrate/oracle_scale.py PASS --new OUT` compares the old and the new lambda with the loop's
-# own view of each twin. The cases and their seeds are read from studies/calibration_blind.sh;
+# own view of each twin. The cases and their seeds are studies/blind_cases.sh's (calibration_blind.sh's);
 # CASE... limits the remaking to those twins (the comparison then covers the ones remade).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -32,22 +32,16 @@ done
 seed_offset=$(cat "$pass/seed_offset")
 design=$(cat "$pass/design")
 mkdir -p "$out/twins" "$out/truth"
-# The case table of calibration_blind.sh: the lines between `cases="` and the closing quote.
-sed -n '/^cases="$/,/^"$/p' studies/calibration_blind.sh | sed '1d;$d' |
-while read -r id model seed planted; do
+source studies/blind_cases.sh
+echo "$blind_cases" | while read -r id model seed planted; do
   [[ -n $id && -n $planted && -f $pass/twins/$id.toml ]] || continue
   [[ $only == "  " || $only == *" $id "* ]] || continue
-  args=()
-  for p in $planted; do
-    case "$p" in
-      effect:*) args+=(--effect "${p#effect:}") ;;
-      set:*) args+=(--set "${p#set:}") ;;
-    esac
-  done
+  # shellcheck disable=SC2086  # the planted list is space-separated words
+  planted_options $planted
   if [[ ! -f $out/truth/$id.json ]]; then
     echo "== twin $id" >&2
     "$gapflow" twin "$design" --out "$out/twins/$id.toml" --truth "$out/truth/$id.json.part" --model "$model" \
-      --seed $((seed + seed_offset)) --replicates 10 --name "$id" --jobs "$jobs" --db "$store" "${args[@]}" >&2
+      --seed $((seed + seed_offset)) --replicates 10 --name "$id" --jobs "$jobs" --db "$store" "${twin_options[@]}" >&2
     if ! diff <(grep -v '^scenario = ' "$pass/twins/$id.toml") <(grep -v '^scenario = ' "$out/twins/$id.toml") > /dev/null; then
       echo "error: the remade $id differs from $pass/twins/$id.toml: not the pass's twin" >&2
       exit 1

@@ -57,52 +57,19 @@ if [[ $recorded_options != "$options_text" ]] && compgen -G "$out/*/summary.json
 fi
 echo "$options_text" > "$out/calibrate_options"
 
-# id  model  seed  planted (effect:NAME:SIZE | set:KEY=VALUE), space-separated
-cases="
-null-1              2d 101
-null-2              2d 102
-null-3              2d 103
-null-4              2d 104
-rolling-low         2d 111 effect:rolling_resistance:low
-rolling-high        2d 112 effect:rolling_resistance:high
-spinning-low        2d 113 effect:spinning_friction:low
-spinning-high       2d 114 effect:spinning_friction:high
-wallfriction-low    2d 115 effect:wall_friction:low
-wallfriction-high   2d 116 effect:wall_friction:high
-scatter-low         2d 117 effect:size_scatter:low
-scatter-high        2d 118 effect:size_scatter:high
-restitution-low     2d 119 effect:restitution:low
-restitution-high    2d 120 effect:restitution:high
-tilt-low            2d 121 effect:lateral_tilt:low
-tilt-high           2d 122 effect:lateral_tilt:high
-gapoffset-low       2d 123 effect:gap_offset:low
-gapoffset-high      2d 124 effect:gap_offset:high
-drag-low            2d 125 effect:linear_drag:low
-drag-high           2d 126 effect:linear_drag:high
-corners-low         2d 127 effect:corner_rounding:low
-corners-high        2d 128 effect:corner_rounding:high
-two-drag-gap        2d 131 effect:linear_drag:high effect:gap_offset:high
-two-tilt-rolling    2d 132 effect:lateral_tilt:high effect:rolling_resistance:high
-outside-quadratic-2 2d 141 set:particles.quadratic_drag_per_m=2
-outside-quadratic-4 2d 142 set:particles.quadratic_drag_per_m=4
-twin-3d             3d 151
-"
+# The cases (id, model, seed, planted): studies/blind_cases.sh.
+source studies/blind_cases.sh
 
-echo "$cases" | while read -r id model seed planted; do
+echo "$blind_cases" | while read -r id model seed planted; do
   [ -n "$id" ] || continue
   seed=$((seed + seed_offset))
   twin="$out/twins/$id.toml"
   if [ ! -f "$twin" ]; then
-    args=()
-    for p in $planted; do
-      case "$p" in
-        effect:*) args+=(--effect "${p#effect:}") ;;
-        set:*) args+=(--set "${p#set:}") ;;
-      esac
-    done
+    # shellcheck disable=SC2086  # the planted list is space-separated words
+    planted_options $planted
     echo "== twin $id ($model, seed $seed): ${planted:-nothing planted}" >&2
     "$gapflow" twin "$design" --out "$twin" --truth "$out/truth/$id.json" --model "$model" --seed "$seed" \
-      --replicates 10 --name "$id" --jobs "$jobs" --db "$out/twin_runs.sqlite" "${args[@]}"
+      --replicates 10 --name "$id" --jobs "$jobs" --db "$out/twin_runs.sqlite" "${twin_options[@]}"
   fi
   if [ ! -f "$out/$id/summary.json" ]; then
     echo "== calibrate $id (2d, blind)" >&2

@@ -1,0 +1,46 @@
+# The blind study's cases, shared by studies/calibration_blind.sh (which makes and calibrates them)
+# and studies/blind_resignal.sh (which makes them again). Sourced, not run.
+
+# id  model  seed  planted (effect:NAME:SIZE | set:KEY=VALUE), space-separated
+blind_cases="
+null-1              2d 101
+null-2              2d 102
+null-3              2d 103
+null-4              2d 104
+rolling-low         2d 111 effect:rolling_resistance:low
+rolling-high        2d 112 effect:rolling_resistance:high
+spinning-low        2d 113 effect:spinning_friction:low
+spinning-high       2d 114 effect:spinning_friction:high
+wallfriction-low    2d 115 effect:wall_friction:low
+wallfriction-high   2d 116 effect:wall_friction:high
+scatter-low         2d 117 effect:size_scatter:low
+scatter-high        2d 118 effect:size_scatter:high
+restitution-low     2d 119 effect:restitution:low
+restitution-high    2d 120 effect:restitution:high
+tilt-low            2d 121 effect:lateral_tilt:low
+tilt-high           2d 122 effect:lateral_tilt:high
+gapoffset-low       2d 123 effect:gap_offset:low
+gapoffset-high      2d 124 effect:gap_offset:high
+drag-low            2d 125 effect:linear_drag:low
+drag-high           2d 126 effect:linear_drag:high
+corners-low         2d 127 effect:corner_rounding:low
+corners-high        2d 128 effect:corner_rounding:high
+two-drag-gap        2d 131 effect:linear_drag:high effect:gap_offset:high
+two-tilt-rolling    2d 132 effect:lateral_tilt:high effect:rolling_resistance:high
+outside-quadratic-2 2d 141 set:particles.quadratic_drag_per_m=2
+outside-quadratic-4 2d 142 set:particles.quadratic_drag_per_m=4
+twin-3d             3d 151
+"
+
+# A case's planted list (effect:NAME:SIZE | set:KEY=VALUE ...) as `gapflow twin` options, in the
+# array twin_options.
+planted_options() {
+  twin_options=()
+  local p
+  for p in "$@"; do
+    case "$p" in
+      effect:*) twin_options+=(--effect "${p#effect:}") ;;
+      set:*) twin_options+=(--set "${p#set:}") ;;
+    esac
+  done
+}
