@@ -7,7 +7,8 @@ For every planted effect that a calibration added (any twin of the pass), its in
 holds the planted value, or misses it toward the effect's neutral value (the fitted size is
 nearer neutral than the truth) or away from it. A fit without bias misses on both sides about
 equally often. Each miss also says how far the fit left the free parameter from its measurement
-(in the measurement's standard errors, 0.04 in the blind designs), and the last lines compare that
+(in the measurement's standard errors, as summary.json's measured_free gives them), and the last
+lines compare that
 distance between the intervals that held and those that missed, over all passes given.
 """
 import glob
@@ -17,17 +18,13 @@ import statistics
 import sys
 
 
-MEASURED_SE = 0.04  # the blind designs' measured friction: +- 0.04 (data/blind/design_v2.toml)
-
-
-def friction_sigmas(truth, summary):
+def friction_sigmas(summary):
     """How far the fit left the free parameter from its measurement, in the measurement's standard
-    errors (None where the twin carries no measurement)."""
-    measured = truth.get("measured", {})
-    for key, value in measured.items():
-        fitted = summary["after"]["params"].get(key)
-        if fitted is not None and value is not None:
-            return (fitted - value) / MEASURED_SE
+    errors, both as the calibration read them (summary.json "measured_free"); None without one."""
+    for m in summary.get("measured_free", []):
+        fitted = summary["after"]["params"].get(m["key"])
+        if fitted is not None and m["se"] > 0:
+            return (fitted - m["measured"]) / m["se"]
     return None
 
 
@@ -46,7 +43,7 @@ def sides(pass_dir):
         truth = {p["key"]: (p["value"], p["neutral"]) for p in truth_json["planted"] if p["name"] != "free"}
         with open(summary) as f:
             summary_json = json.load(f)
-        sigmas = friction_sigmas(truth_json, summary_json)
+        sigmas = friction_sigmas(summary_json)
         note = f"; free parameter {sigmas:+.1f} se from its measurement" if sigmas is not None else ""
         for e in summary_json["effects"]:
             if e["key"] not in truth:

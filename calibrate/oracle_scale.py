@@ -27,7 +27,8 @@ import os
 import statistics
 import sys
 
-VISIBLE_POWER = 0.8
+from blind_summary import NOT_SINGLE, VISIBLE_POWER, truth_label
+
 BINS = ((0, 10), (10, 50), (50, math.inf))
 
 
@@ -62,7 +63,7 @@ def twins(pass_dir, truth_dir=None):
         signal = truth.get("signal")
         if planted and not signal:
             continue  # a planted effect without a measured signal: nothing to compare
-        single = len(planted) == 1 and planted[0]["name"] != "set"
+        single = truth_label(old)[0] not in NOT_SINGLE  # as the pass's cases.csv counts it
         out.append((case, signal["chi2"] if signal else 0.0, signal["oracle_power"] if signal else None,
                     fitted["chi2"] - fitted["dof"], single, identified.get(case) == "True"))
     return out

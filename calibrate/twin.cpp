@@ -249,7 +249,8 @@ double planted_noncentrality(const DataFile& design, const Prediction& with, con
 }
 
 // The model's part of the noise as a raw grid node shows it: the standard error of a mean of
-// the design's model replicates, from `se` (a mean of def.replicates runs).
+// the design's model replicates, from `se` (a mean of def.replicates runs). Also the scaling of
+// loop_model_se's surface noise, built from means of def.replicates runs.
 std::vector<double> raw_model_se(const DataFile& design, const TwinDef& def, const std::vector<double>& se) {
   const double model_share = static_cast<double>(def.replicates) / design.model_replicates;
   std::vector<double> out;
@@ -271,11 +272,7 @@ std::vector<double> loop_model_se(const DataFile& design, const TwinDef& def, co
   BaselineFit grid;
   grid.grid = nodes;
   grid.grid_predictions = predictions;
-  const Prediction at = surface_around(design, grid, nodes[near]).predict_fit(nodes[near]);
-  const double model_share = static_cast<double>(def.replicates) / design.model_replicates;
-  std::vector<double> out;
-  for (double s : at.se_fit) out.push_back(s * std::sqrt(model_share));
-  return out;
+  return raw_model_se(design, def, surface_around(design, grid, nodes[near]).predict_fit(nodes[near]).se_fit);
 }
 
 TwinTruth draw_twin(const DataFile& design, const TwinDef& def) {

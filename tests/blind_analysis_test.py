@@ -42,6 +42,7 @@ def summary(effects, verdict, rms_before=2.0, rms_after=1.0, fitted_chi2=88.0):
         "before": {"fitted": fitted, "held_out_fresh": errors(48.0, rms_before)},
         "after": {"params": {"particles.friction_particle": 0.42}, "fitted": errors(43.0, 1.0),
                   "held_out_fresh": errors(12.0, rms_after)},
+        "measured_free": [{"key": "particles.friction_particle", "measured": 0.38, "se": 0.04}],
         "rounds": [], "runs_simulated": 1000, "runs_reused": 200, "run_seconds": 600.0, "wall_seconds": 320.0,
     }
 
