@@ -24,6 +24,7 @@ struct CalibrateCommands::Options {
   bool no_plots = false, mpi = false, check = false;
   int max_effects = 2;
   int contenders = CalibrationDef{}.contenders;
+  int model_replicates = 0;  // 0: the data file's [model] replicates
   double decisive_score_p = CalibrationDef{}.decisive_score_p;
   // twin
   std::uint64_t seed = 1;
@@ -54,8 +55,18 @@ int print_data_check(const DataFile& data) {
   return 0;
 }
 
+// --model-replicates: the model's runs per point and parameter value, in place of the data file's
+// [model] replicates. The data's own noise is the data's; the model's shrinks with its replicates, and
+// every test of the loop compares the residual against the two together: more model replicates, more
+// power, at a cost in runs (replicates 1..n of a parameter set are the same runs whatever n is, so
+// raising n reuses the store's runs and simulates only the new replicates).
+DataFile with_model_replicates(DataFile data, int model_replicates) {
+  if (model_replicates > 0) data.model_replicates = model_replicates;
+  return data;
+}
+
 int cmd_calibrate(const CalibrateCommands::Options& o) {
-  const DataFile data = load_data_file(o.data_file);
+  const DataFile data = with_model_replicates(load_data_file(o.data_file), o.model_replicates);
   check_points_run_in(data, parse_model_kind(o.model));  // exit 2 now, not at the first run
   if (o.check) return print_data_check(data);
   const std::filesystem::path out = o.out.empty() ? std::filesystem::path("results/calibration") / data.name : std::filesystem::path(o.out);
@@ -147,6 +158,10 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
                           "Adjusted p below which the best candidate is tried even where the fitted chi2 is within "
                           "the noise (default 0: never; rule 1 of calibrate/decisions.hpp)")
       ->check(CLI::Range(0.0, 0.05));
+  o.calibrate->add_option("--model-replicates", o.model_replicates,
+                          "Model runs per point and parameter value, in place of the data file's [model] replicates "
+                          "(more: less model noise in every test, more runs)")
+      ->check(CLI::Range(2, 1000));
   o.calibrate->add_flag("--no-plots", o.no_plots, "Do not draw the PNG figures");
   o.calibrate->add_flag("--check", o.check, "Read and check the data file (every point's scenario compiled), run nothing");
   o.calibrate->add_flag("--mpi", o.mpi,

@@ -85,6 +85,7 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
       measured += fmt::format("{}{{\"key\": {}, \"measured\": {}, \"se\": {}}}", measured.empty() ? "" : ", ",
                               json_string(f.key), json_number(f.measured), json_number(f.measured_se));
   o << "  \"measured_free\": [" << measured << "],\n";
+  o << fmt::format("  \"model_replicates\": {},\n", data.model_replicates);
   o << fmt::format("  \"contenders\": {},\n", r.contenders);
   o << fmt::format("  \"decisive_score_p\": {},\n", r.decisive_score_p);
   o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n  \"held_out_beyond_noise\": {},\n", json_string(r.verdict),
@@ -276,8 +277,9 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
   o << "\n## Log\n\n```\n";
   for (const std::string& l : r.log) o << l << "\n";
   o << "```\n";
-  o << fmt::format("\nCost: {} runs simulated, {} reused from the store; {:.0f} s of runs (about CPU seconds), {:.0f} s wall.\n",
-                   r.runs_simulated, r.runs_reused, r.run_seconds, r.wall_seconds);
+  o << fmt::format("\nCost: {} runs simulated, {} reused from the store; {:.0f} s of runs (about CPU seconds), {:.0f} s wall; "
+                   "{} model replicates per point and parameter value.\n",
+                   r.runs_simulated, r.runs_reused, r.run_seconds, r.wall_seconds, data.model_replicates);
   o << "\nFigures: `data_vs_model.png` (data and model before/after with error bars against each design column), `residuals.png`, `candidate_scores.png`.\n";
 }
 

@@ -140,6 +140,11 @@ TEST(Hardening, MessagesBlameTheRightKeyAndSayWhy) {
   const std::string design = shell_quoted(source_path("data/examples/tiny_design.toml").string());
   expect_bad_input("calibrate " + design + " --check --contenders 0", "--contenders: Value 0 not in range 1 to 10");
   EXPECT_EQ(run_gapflow("calibrate " + design + " --check --contenders 1").code, 0);
+  // The model's replicates in place of the data file's: as the file's own, 2 to 1000.
+  expect_bad_input("calibrate " + design + " --check --model-replicates 1", "--model-replicates: Value 1 not in range 2 to 1000");
+  const CliResult twelve = run_gapflow("calibrate " + design + " --check --model-replicates 12");
+  EXPECT_EQ(twelve.code, 0) << twelve.output;
+  EXPECT_NE(twelve.output.find("12 model replicates per point"), std::string::npos) << twelve.output;
 }
 
 // ---------------------------------------------------------------- stores
