@@ -13,6 +13,9 @@
 # Then `calibrate/oracle_scale.py PASS --new OUT` compares the old and the new lambda with the loop's
 # own view of each twin. The cases and their seeds are studies/blind_cases.sh's (calibration_blind.sh's);
 # CASE... limits the remaking to those twins (the comparison then covers the ones remade).
+# DESIGN=<design file> remakes them from another design that holds the same points, e.g.
+# data/blind/design_v3.toml (v2 with 12 model replicates): lambda is then that design's loop's view.
+# The data must still be the pass's; the twin's description and its [model] replicates may differ.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [[ $# -lt 2 ]]; then
@@ -30,7 +33,11 @@ for f in seed_offset design; do
 done
 [[ -f $store ]] || echo "note: no store $store: every twin is simulated again" >&2
 seed_offset=$(cat "$pass/seed_offset")
-design=$(cat "$pass/design")
+design=${DESIGN:-$(cat "$pass/design")}
+# What may differ between the pass's twin and the remade one: the scenario line (a committed pass
+# rewrites it), and with another design its name (first line, description) and the model's replicates
+# (the first `replicates =` line; the points' own come after it).
+comparable() { grep -v -e '^scenario = ' -e '^description = ' -e '^# Made by' "$1" | awk '!(/^replicates = / && !seen++)'; }
 mkdir -p "$out/twins" "$out/truth"
 source studies/blind_cases.sh
 echo "$blind_cases" | while read -r id model seed planted; do
@@ -42,7 +49,7 @@ echo "$blind_cases" | while read -r id model seed planted; do
     echo "== twin $id" >&2
     "$gapflow" twin "$design" --out "$out/twins/$id.toml" --truth "$out/truth/$id.json.part" --model "$model" \
       --seed $((seed + seed_offset)) --replicates 10 --name "$id" --jobs "$jobs" --db "$store" "${twin_options[@]}" >&2
-    if ! diff <(grep -v '^scenario = ' "$pass/twins/$id.toml") <(grep -v '^scenario = ' "$out/twins/$id.toml") > /dev/null; then
+    if ! diff <(comparable "$pass/twins/$id.toml") <(comparable "$out/twins/$id.toml") > /dev/null; then
       echo "error: the remade $id differs from $pass/twins/$id.toml: not the pass's twin" >&2
       exit 1
     fi
