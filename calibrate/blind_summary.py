@@ -94,11 +94,13 @@ def main(out):
         label, planted = truth_label(truth)
         verdict, added = said(summary)
         found = []
+        tried = []  # the planted effect is the one the loop tried, not only a member of its group
         covered = []
         for p in planted:
             hit = [a for a in added if p["name"] in a["group"] or p["name"] == a["effect"]]
             found.append(bool(hit))
             exact = [a for a in hit if a["effect"] == p["name"]]
+            tried.append(bool(exact))
             if exact:
                 covered.append(exact[0]["lo95"] <= p["value"] <= exact[0]["hi95"])
         signal = truth.get("signal")
@@ -130,6 +132,7 @@ def main(out):
             "verdict": summary["verdict"],
             "added": "; ".join(f"{x['key']}={x['value']:.4g} [{x['lo95']:.4g}, {x['hi95']:.4g}]" for x in added),
             "identified": all(found) if planted and label not in ("outside the catalogue", "3D model") else "",
+            "tried_planted": all(tried) if planted and label not in ("outside the catalogue", "3D model") else "",
             "covered": "" if not covered else all(covered),
             "n_covered": sum(covered),
             "n_intervals": len(covered),
@@ -167,6 +170,7 @@ def main(out):
     outside = [r for r in rows if r["truth"] == "outside the catalogue"]
     two = [r for r in rows if r["truth"] == "two effects"]
     ident = sum(1 for r in single if r["identified"] is True)
+    ident_tried = sum(1 for r in single if r["identified"] is True and r["tried_planted"] is True)
     fp = sum(1 for r in nulls if r["added"])  # an effect added (a null called "unexplained" is counted apart)
     null_unexplained = sum(1 for r in nulls if not r["added"] and r["said"] == "unexplained")
     intervals = sum(r["n_intervals"] for r in rows)
@@ -249,6 +253,8 @@ def main(out):
         "",
         f"* twins finished: {len(rows)}",
         f"* single planted effect identified (alone, or in a reported group that contains it): {pct(ident, len(single))}",
+        f"* of these, the effect tried is the planted one (not only a member of the group reported): "
+        f"{ident_tried} of {ident}",
         f"* null twins where an effect was added: {pct(fp, len(nulls))}; called \"unexplained\" (nothing added): "
         f"{pct(null_unexplained, len(nulls))}",
         f"* outside-the-catalogue twins: {', '.join(r['said'] for r in outside) or 'none'}",

@@ -75,6 +75,10 @@ CASES = {
     # Visible in its data (power 0.9) and missed: a round stopped with a best adjusted p of 2e-4.
     "spin-high": (truth("spin-high", [SPIN], power=0.9, chi2=20.0),
                   summary([], "consistent with noise", rms_before=1.0, rms_after=1.0, fitted_chi2=65.0), STOPPED),
+    # Identified only through its group: linear drag tried for {linear_drag, rolling_resistance}.
+    "rolling-high": (truth("rolling-high", [ROLL], power=1.0, chi2=50.0),
+                     summary([added("linear_drag", DRAG["key"], 1.0, 0.5, 1.5, group=["linear_drag", "rolling_resistance"])],
+                             "effect found", fitted_chi2=95.0), ""),
     # Invisible (power 0.1) and rightly "none".
     "rolling-low": (truth("rolling-low", [ROLL], power=0.1, chi2=1.0),
                     summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), ""),
@@ -121,6 +125,9 @@ class BlindAnalysis(unittest.TestCase):
         r = self.rows
         self.assertEqual(r["drag-low"]["truth"], "linear_drag")
         self.assertEqual(r["drag-low"]["identified"], "True")
+        self.assertEqual(r["drag-low"]["tried_planted"], "True")
+        self.assertEqual(r["rolling-high"]["identified"], "True")
+        self.assertEqual(r["rolling-high"]["tried_planted"], "False")
         self.assertEqual(r["drag-low"]["covered"], "False")
         self.assertEqual(r["spin-high"]["identified"], "False")
         self.assertEqual(r["spin-high"]["visible"], "True")
@@ -133,19 +140,21 @@ class BlindAnalysis(unittest.TestCase):
 
     def test_blind_summary_report_counts(self):
         report = (self.pass_dir / "report.md").read_text()
-        self.assertIn("identified (alone, or in a reported group that contains it): 1 of 3 (33 %)", report)
+        self.assertIn("identified (alone, or in a reported group that contains it): 2 of 4 (50 %)", report)
+        # rolling-high counts through its group only: linear drag was tried, not the planted rolling resistance.
+        self.assertIn("the effect tried is the planted one (not only a member of the group reported): 1 of 2", report)
         self.assertIn("null twins where an effect was added: 1 of 1 (100 %)", report)
         self.assertIn("contain the planted value: 0 of 1 (0 %)", report)
-        self.assertIn("visible in their data (oracle power >= 0.8): 2 of 3; of these identified: 1 of 2 (50 %)", report)
-        # Excess over the noise sqrt(rms^2 - 1): sqrt(3) = 1.73 before, 0 after, for the one found twin.
-        self.assertIn("that excess summed over those cases: 1.7 -> 0.0", report)
+        self.assertIn("visible in their data (oracle power >= 0.8): 3 of 4; of these identified: 2 of 3 (67 %)", report)
+        # Excess over the noise sqrt(rms^2 - 1): sqrt(3) = 1.73 before, 0 after, for each of the two found twins.
+        self.assertIn("that excess summed over those cases: 3.5 -> 0.0", report)
         self.assertTrue((self.pass_dir / "confusion.png").stat().st_size > 0)
 
     def test_visibility_ceiling_counts_from_cases_csv(self):
         code, out, _ = run("visibility_ceiling.py", self.pass_dir, self.pass_dir)
         self.assertEqual(code, 0)
-        self.assertIn("identified 1 of 3 (33 %); visible 2 (ceiling 67 %); identified among the visible 1 of 2 (50 %)", out)
-        self.assertIn("pooled: identified 2 of 6", out)
+        self.assertIn("identified 2 of 4 (50 %); visible 3 (ceiling 75 %); identified among the visible 2 of 3 (67 %)", out)
+        self.assertIn("pooled: identified 4 of 8", out)
 
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)
@@ -172,7 +181,8 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("1 round(s)", out)
 
     def test_oracle_scale_sets_lambda_against_the_loops_excess(self):
-        # Baseline excess chi2 - 43: null-1 +2; drag-low +172 for lambda 170; spin-high +22 for lambda 20.
+        # Baseline excess chi2 - 43: null-1 +2; drag-low +172 for lambda 170; rolling-high +52 for lambda 50;
+        # spin-high +22 for lambda 20.
         remade = Path(self.tmp.name) / "remade"
         (remade / "truth").mkdir(parents=True, exist_ok=True)
         (remade / "truth" / "spin-high.json").write_text(json.dumps(truth("spin-high", [SPIN], power=0.5, chi2=10.0)))
@@ -180,16 +190,16 @@ class BlindAnalysis(unittest.TestCase):
         self.assertEqual(code, 0, err)
         own, new = out.split("the same twins")[:2]
         self.assertIn("without a planted effect (1): mean excess 2.0", own)
-        # (172 - 2) / 170 = 1.00 and (22 - 2) / 20 = 1.00 with the pass's lambda ...
-        self.assertIn("lambda >= 10 (2 twins): (excess - nulls' mean) / lambda, summed 1.00, median per twin 1.00", own)
-        self.assertIn("identified 1 of 3; visible (oracle power >= 0.8) 2 of 3 (the ceiling); identified among the "
-                      "visible 1 of 2", own)
+        # (172 - 2) / 170, (52 - 2) / 50 and (22 - 2) / 20, each 1.00, with the pass's lambda ...
+        self.assertIn("lambda >= 10 (3 twins): (excess - nulls' mean) / lambda, summed 1.00, median per twin 1.00", own)
+        self.assertIn("identified 2 of 4; visible (oracle power >= 0.8) 3 of 4 (the ceiling); identified among the "
+                      "visible 2 of 3", own)
         # ... and spin-high's remade lambda 10 gives (22 - 2) / 10 = 2.00; it is no longer visible.
         self.assertIn("lambda >= 10 (1 twins): (excess - nulls' mean) / lambda, summed 2.00", new)
         self.assertIn("visible (oracle power >= 0.8) 0 of 1 (the ceiling)", new)
         self.assertIn("spin-high: 20.0 (0.90) -> 10.0 (0.50); excess 22.0", out)
         code, out, _ = run("oracle_scale.py", self.pass_dir, "--remade", "../remade")
-        self.assertIn("visible (oracle power >= 0.8) 1 of 3 (the ceiling)", out.split("where remade")[1])
+        self.assertIn("visible (oracle power >= 0.8) 2 of 4 (the ceiling)", out.split("where remade")[1])
 
     def test_missing_folder_is_exit_2(self):
         empty = Path(self.tmp.name) / "empty"
