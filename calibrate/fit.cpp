@@ -5,12 +5,27 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace gapflow {
 
 double total_sigma(const DataFile& data, const Prediction& p, std::size_t i) {
   return std::hypot(data.fit_se(i), p.se_fit[i]);
+}
+
+double model_noise_share(const DataFile& data, const Prediction& p) {
+  std::vector<double> share;
+  for (std::size_t i = 0; i < data.points.size(); ++i) {
+    if (data.points[i].held_out || !p.valid[i]) continue;
+    const double model = p.se_fit[i] * p.se_fit[i], total = std::pow(total_sigma(data, p, i), 2);
+    if (total > 0 && std::isfinite(total)) share.push_back(model / total);
+  }
+  if (share.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto mid = share.begin() + static_cast<std::ptrdiff_t>(share.size() / 2);
+  std::nth_element(share.begin(), mid, share.end());
+  if (share.size() % 2 == 1) return *mid;
+  return 0.5 * (*mid + *std::max_element(share.begin(), mid));
 }
 
 namespace {

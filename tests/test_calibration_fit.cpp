@@ -44,6 +44,19 @@ Surface flat_surface_with(const std::vector<double>& sizes, const std::vector<st
   return s;
 }
 
+TEST(ModelNoise, ShareIsTheModelsPartOfEachPointsVarianceMedianOverTheFittedPoints) {
+  const DataFile data = two_points(0.0, 0.0, 0.03);  // linear scale: se 0.03 at both (floor_relative of 0 is 0)
+  Prediction p;
+  p.value = p.fit = {0.0, 0.0};
+  p.valid = {true, true};
+  p.se_fit = {0.04, 0.0};  // 0.04^2 / (0.03^2 + 0.04^2) = 0.64, and 0
+  EXPECT_NEAR(model_noise_share(data, p), 0.32, 1e-12);
+  p.valid = {true, false};  // an invalid model point has no share
+  EXPECT_NEAR(model_noise_share(data, p), 0.64, 1e-12);
+  p.valid = {false, false};
+  EXPECT_TRUE(std::isnan(model_noise_share(data, p)));
+}
+
 TEST(EffectFit, RestartsFromTheProfilesBestWhenTheFirstFitStopsAtAKink) {
   // Point 0 responds 0, 1, 0.5, 1 at sizes 0..3, point 1 0, 0.6, 0.5, 1: both reach the data
   // (0.95) only at size 2.9; on the first segment they cannot both, and size 1 is a kink
