@@ -96,6 +96,7 @@ struct Surface {
   std::vector<Eigen::MatrixXd> cov;   // per point: covariance of coef
   std::vector<bool> valid;            // every node gave a value at this point
   std::vector<EffectTerm> effects;    // added (fitted) effects
+  double lack_of_fit = 1;             // pooled lack of fit over the nodes' noise (>= 1: cov was widened by it)
 
   // Value, fit-scale value and its se at each point; params hold free keys and effect keys.
   Prediction predict(const ParameterSet& params, const DataFile& data) const;
