@@ -147,7 +147,6 @@ struct CalibrationResult {
   int contenders = 1;              // CalibrationDef::contenders it ran with
   double decisive_score_p = 0;     // CalibrationDef::decisive_score_p it ran with
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
-  int model_replicates = 0;        // model runs per point and parameter value it ran with
   double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)
   // The held-out points after everything (fresh seeds), their chi^2 with the fitted parameters'
   // uncertainty carried to them (attribution.hpp held_out_chi_square): the verdict's test.

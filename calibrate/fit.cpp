@@ -172,9 +172,17 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
   // point's uncertainty by the pooled lack of fit.
   // Logged (fit_baseline): in four of blind pass 15's twins it was 0.82-0.95, so no widening, at 6 and at 12
   // model replicates alike.
-  if (lack_dof > 0) s.lack_of_fit = lack_sum / lack_dof;
+  if (lack_dof > 0) s.lack_of_fit = lack_sum / lack_dof, s.lack_of_fit_measured = true;
   for (Eigen::MatrixXd& c : s.cov) c *= std::max(1.0, s.lack_of_fit);
   return s;
+}
+
+// The pooled lack of fit as the log gives it: a variance ratio (reduced chi^2 of the nodes about the
+// quadratic); the coefficients' covariance is scaled by it where it exceeds 1, their se by its root.
+std::string lack_of_fit_text(const Surface& s) {
+  if (!s.lack_of_fit_measured) return "";
+  return fmt::format("; lack of fit (reduced chi2 of the nodes about it) {:.2f}{}", s.lack_of_fit,
+                     s.lack_of_fit > 1 ? ", its variance widened by that" : "");
 }
 
 struct Var {
@@ -516,11 +524,9 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   for (const FreeParameter& f : data.free)
     if (f.has_measurement())
       say(fmt::format("  {} measured {:.4g} +- {:.4g}: a datum of every fit", f.key, f.measured, f.measured_se));
-  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f}{}); lack of fit "
-                  "{:.2f} x the nodes' noise{}", surface_nodes,
+  say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f}{}){}", surface_nodes,
                   out.params.label(), fitted_chi2(data, out.surface.predict(out.params, data), out.params),
-                  measured_count(data) > 0 ? ", the measurements included" : "", out.surface.lack_of_fit,
-                  out.surface.lack_of_fit > 1 ? " (its uncertainty widened by it)" : ""));
+                  measured_count(data) > 0 ? ", the measurements included" : "", lack_of_fit_text(out.surface)));
   return out;
 }
 

@@ -96,7 +96,8 @@ struct Surface {
   std::vector<Eigen::MatrixXd> cov;   // per point: covariance of coef
   std::vector<bool> valid;            // every node gave a value at this point
   std::vector<EffectTerm> effects;    // added (fitted) effects
-  double lack_of_fit = 1;             // pooled lack of fit over the nodes' noise (>= 1: cov was widened by it)
+  double lack_of_fit = 1;             // pooled reduced chi^2 of the nodes about the quadratic (> 1: cov widened by it)
+  bool lack_of_fit_measured = false;  // some point had more nodes than coefficients
 
   // Value, fit-scale value and its se at each point; params hold free keys and effect keys.
   Prediction predict(const ParameterSet& params, const DataFile& data) const;

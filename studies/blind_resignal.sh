@@ -9,7 +9,8 @@
 # OUT/truth; STORE (default PASS/twin_runs.sqlite, which is not committed) holds the pass's twin
 # runs, so a twin whose runs are all there costs no simulation (without it everything is run
 # again: minutes per twin). The remade data file must equal the pass's (the scenario line aside,
-# which a committed pass rewrites): else the twins differ and the script stops with exit 1.
+# which a committed pass rewrites; with DESIGN, also the lines naming the design and the model's
+# replicates): else the twins differ and the script stops with exit 1.
 # Then `calibrate/oracle_scale.py PASS --new OUT` compares the old and the new lambda with the loop's
 # own view of each twin. The cases and their seeds are studies/blind_cases.sh's (calibration_blind.sh's);
 # CASE... limits the remaking to those twins (the comparison then covers the ones remade).
@@ -37,7 +38,10 @@ design=${DESIGN:-$(cat "$pass/design")}
 # What may differ between the pass's twin and the remade one: the scenario line (a committed pass
 # rewrites it), and with another design its name (first line, description) and the model's replicates
 # (the first `replicates =` line; the points' own come after it).
-comparable() { grep -v -e '^scenario = ' -e '^description = ' -e '^# Made by' "$1" | awk '!(/^replicates = / && !seen++)'; }
+comparable() {
+  if [[ -z ${DESIGN:-} ]]; then grep -v '^scenario = ' "$1"; return; fi
+  grep -v -e '^scenario = ' -e '^description = ' -e '^# Made by' "$1" | awk '!(/^replicates = / && !seen++)'
+}
 mkdir -p "$out/twins" "$out/truth"
 source studies/blind_cases.sh
 echo "$blind_cases" | while read -r id model seed planted; do

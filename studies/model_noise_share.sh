@@ -18,8 +18,9 @@ for n in "$@"; do
   for twin in "$pass"/twins/*.toml; do
     id=$(basename "$twin" .toml)
     [[ -f $out/$n/$id/summary.json ]] && continue
+    mkdir -p "$out/$n"
     "$gapflow" calibrate "$twin" --model 2d --db "$store" --out "$out/$n/$id" --jobs 1 --no-plots --max-effects 0 \
-      --model-replicates "$n" > /dev/null 2>&1 || { echo "error: $id at $n replicates failed" >&2; exit 1; }
+      --model-replicates "$n" > "$out/$n/$id.log" 2>&1 || { echo "error: $id at $n replicates failed; see $out/$n/$id.log" >&2; exit 1; }
   done
 done
 /usr/bin/python3 - "$pass" "$out" "$@" <<'PY'
@@ -29,7 +30,10 @@ pass_dir, out, counts = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3:]
 made_by_3d = {p.stem for p in (pass_dir / "truth").glob("*.json") if json.load(open(p)).get("model") == "3d"}
 for n in counts:
     share = {s.parent.name: json.load(open(s))["model_noise_share"] for s in (out / n).glob("*/summary.json")}
-    v = [x for case, x in share.items() if case not in made_by_3d]
+    v = [x for case, x in share.items() if case not in made_by_3d and x is not None]  # null: no valid point
+    if not v:
+        print(f"{n} model replicates: no 2D-made twin with a share")
+        continue
     print(f"{n} model replicates: the model's share of the variance at the baseline, median {statistics.median(v):.2f} "
           f"over {len(v)} 2D-made twins (range {min(v):.2f}-{max(v):.2f})")
 PY

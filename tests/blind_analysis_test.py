@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The blind study's analysis scripts (calibrate/*.py) on a tiny pass whose answers are known.
 
-A fake pass folder is written from scratch: five twins with their truth/ files and the parts of
+A fake pass folder is written from scratch: six twins with their truth/ files and the parts of
 summary.json and report.md the scripts read. Each script is run as a user runs it (a subprocess,
 `/usr/bin/python3 calibrate/X.py ...`) and its counts are compared with what the fixture was made
 to hold. Every assertion fails if a script miscounts: e.g. the visible-but-missed twin, the null

@@ -53,6 +53,9 @@ TEST(ModelNoise, ShareIsTheModelsPartOfEachPointsVarianceMedianOverTheFittedPoin
   EXPECT_NEAR(model_noise_share(data, p), 0.32, 1e-12);
   p.valid = {true, false};  // an invalid model point has no share
   EXPECT_NEAR(model_noise_share(data, p), 0.64, 1e-12);
+  p.valid = {true, true};
+  p.se_fit = {0.04, std::nan("")};  // nor has a point whose model se is not finite
+  EXPECT_NEAR(model_noise_share(data, p), 0.64, 1e-12);
   p.valid = {false, false};
   EXPECT_TRUE(std::isnan(model_noise_share(data, p)));
 }
