@@ -58,6 +58,12 @@ TEST(ModelNoise, ShareIsTheModelsPartOfEachPointsVarianceMedianOverTheFittedPoin
   EXPECT_NEAR(model_noise_share(data, p), 0.64, 1e-12);
   p.valid = {false, false};
   EXPECT_TRUE(std::isnan(model_noise_share(data, p)));
+  // A held-out point is not fitted: its share does not count, however large.
+  DataFile with_held_out = two_points(0.0, 0.0, 0.03);
+  with_held_out.points[1].held_out = true;
+  p.valid = {true, true};
+  p.se_fit = {0.0, 1.0};
+  EXPECT_NEAR(model_noise_share(with_held_out, p), 0.0, 1e-12);
 }
 
 TEST(EffectFit, RestartsFromTheProfilesBestWhenTheFirstFitStopsAtAKink) {
