@@ -3,6 +3,7 @@
 #include "calibrate/decisions.hpp"
 #include "calibrate/effect_catalogue.hpp"
 #include "calibrate/effect_responses.hpp"
+#include "calibrate/error_measures.hpp"
 #include "calibrate/fit.hpp"
 #include "common/statistics.hpp"
 #include "common/toml_strict.hpp"
@@ -53,151 +54,12 @@ std::vector<std::string> shared_run_correlations(const DataFile& data, const Bas
   return out;
 }
 
-struct HeldOutCheck {
-  int n = 0;                       // held-out points
-  double before = 0, after = 0;    // their chi^2, direct simulation on the keep test's own seeds
-};
-
-HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const ParameterSet& before,
-                            const ParameterSet& after) {
-  HeldOutCheck c;
-  c.n = static_cast<int>(data.points.size() - data.fitted_count());
-  if (c.n == 0) return c;
-  // Only the held-out points, at keep_test_replicate_factor x the replicates: a parameter change parts
-  // the trajectories within a few collisions, so the two sets' runs are nearly independent even on
-  // common seeds, and at the file's replicate count their noise was as large as the data's own
-  // (blind study pass 4, commit 8b8781f: a planted size scatter with BIC 55.6 -> 34.5 was rejected
-  // for 29.5 -> 35.2 on 12 points).
-  const std::vector<Prediction> p = ev.evaluate({before, after}, data.seed + def.decision_seed_offset,
-                                                data.model_replicates * def.keep_test_replicate_factor,
-                                                data.held_out_flags());
-  c.before = chi2_of(data, p[0], true);
-  c.after = chi2_of(data, p[1], true);
-  return c;
-}
-
-constexpr double kInvalidResidual = 10.0;  // a point the model cannot produce counts as 10 sigma
-
-// Data minus model over the total standard error, on the fit scale (every point).
-std::vector<double> whitened_residual(const DataFile& data, const Prediction& p) {
-  std::vector<double> w;
-  for (std::size_t i = 0; i < data.points.size(); ++i) {
-    if (!p.valid[i]) {
-      w.push_back(kInvalidResidual);
-      continue;
-    }
-    w.push_back((data.fit_value(i) - p.fit[i]) / total_sigma(data, p, i));
-  }
-  return w;
-}
-
-// `params` are the parameters behind `p`: on the fitted points the free parameters' measurements
-// join the chi^2 (one degree of freedom each), not the RMSE or the RMS (those are the points').
-ErrorMeasures measure(const DataFile& data, const Prediction& p, const ParameterSet& params, bool held_out,
-                      int fitted_parameters) {
-  ErrorMeasures m;
-  const std::vector<double> w = whitened_residual(data, p);
-  std::vector<double> picked;
-  double sq = 0;
-  for (std::size_t i = 0; i < data.points.size(); ++i) {
-    if (data.points[i].held_out != held_out) continue;
-    picked.push_back(w[i]);
-    if (!p.valid[i]) {
-      ++m.invalid;
-      continue;
-    }
-    const double e = data.fit_value(i) - p.fit[i];
-    sq += e * e;
-  }
-  m.n = static_cast<int>(picked.size());
-  if (m.n == 0) return m;
-  const int valid = m.n - m.invalid;
-  m.rmse = valid > 0 ? std::sqrt(sq / valid) : kNaN;
-  const Eigen::VectorXd v = Eigen::Map<const Eigen::VectorXd>(picked.data(), m.n);
-  m.rms_whitened = std::sqrt(v.squaredNorm() / m.n);
-  if (held_out) {
-    m.chi = chi_square_of(v, 0);
-    return m;
-  }
-  const Eigen::VectorXd meas = measurement_rows(data, params, {}).residual;
-  Eigen::VectorXd all(v.size() + meas.size());
-  all << v, meas;
-  m.chi = chi_square_of(all, fitted_parameters);
-  return m;
-}
-
-ModelState make_state(const DataFile& data, const ParameterSet& params, const Prediction& p, int fitted_parameters) {
-  ModelState s;
-  s.params = params;
-  s.prediction = p;
-  s.whitened = whitened_residual(data, p);
-  s.fitted = measure(data, p, params, false, fitted_parameters);
-  s.held_out = measure(data, p, params, true, fitted_parameters);
-  // The fits' objective, not chi^2 (fit.hpp); the measurements are data of the fit.
-  s.bic = bic(deviance_of(data, p, params), fitted_parameters, s.fitted.n + measured_count(data));
-  return s;
-}
-
 // The fitted points of a per-point vector, whitened by the state's total sigma.
 Eigen::VectorXd fitted_whitened(const DataFile& data, const Prediction& at, const std::vector<double>& per_point) {
   std::vector<double> v;
   for (std::size_t i = 0; i < data.points.size(); ++i)
     if (!data.points[i].held_out) v.push_back(at.valid[i] ? per_point[i] / total_sigma(data, at, i) : 0.0);
   return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
-}
-
-// The final state's held-out chi^2 on fresh seeds, with the fitted parameters' (free and added
-// effects') uncertainty carried to the held-out points (held_out_chi_square): sensitivities by
-// central differences on the final surface, over 1e-3 of each parameter's range. A parameter
-// the fit left at an end of its range (twin-3d's rolling contact at 1) is left out: the
-// linear variance would widen C for a direction the fit cannot move in.
-ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const ModelState& after,
-                             const Prediction& fresh) {
-  struct Key {
-    std::string key;
-    double at, h;
-  };
-  std::vector<Key> keys;
-  auto consider = [&](const std::string& key, double fallback, double lo, double hi) {
-    const double at = after.params.get(key, fallback), h = 1e-3 * (hi - lo);
-    if (at - h > lo && at + h < hi) keys.push_back({key, at, h});
-  };
-  for (const FreeParameter& f : data.free) consider(f.key, 0.5 * (f.lo + f.hi), f.lo, f.hi);
-  for (const EffectTerm& e : surface.effects) consider(e.key, e.neutral, e.lo, e.hi);
-  std::vector<std::vector<double>> slope;  // [key][point], fit scale per key unit
-  for (const auto& [key, at, h] : keys) {
-    const Prediction up = surface.predict_fit(after.params.with(key, at + h));
-    const Prediction dn = surface.predict_fit(after.params.with(key, at - h));
-    std::vector<double> d;
-    for (std::size_t i = 0; i < data.points.size(); ++i) d.push_back((up.fit[i] - dn.fit[i]) / (2 * h));
-    slope.push_back(std::move(d));
-  }
-  std::vector<std::size_t> fitted, held;
-  for (std::size_t i = 0; i < data.points.size(); ++i) (data.points[i].held_out ? held : fitted).push_back(i);
-  const auto k = static_cast<Eigen::Index>(keys.size());
-  Eigen::MatrixXd X(static_cast<Eigen::Index>(fitted.size()), k), G(static_cast<Eigen::Index>(held.size()), k);
-  Eigen::VectorXd r(static_cast<Eigen::Index>(held.size()));
-  const std::vector<double> w = whitened_residual(data, fresh);
-  for (Eigen::Index j = 0; j < k; ++j) {
-    const std::vector<double>& d = slope[static_cast<std::size_t>(j)];
-    for (std::size_t a = 0; a < fitted.size(); ++a) {
-      const std::size_t i = fitted[a];
-      X(static_cast<Eigen::Index>(a), j) =
-          after.prediction.valid[i] && surface.valid[i] ? d[i] / total_sigma(data, after.prediction, i) : 0.0;
-    }
-    for (std::size_t b = 0; b < held.size(); ++b) {
-      const std::size_t i = held[b];
-      G(static_cast<Eigen::Index>(b), j) = fresh.valid[i] && surface.valid[i] ? d[i] / total_sigma(data, fresh, i) : 0.0;
-    }
-  }
-  for (std::size_t b = 0; b < held.size(); ++b) r(static_cast<Eigen::Index>(b)) = w[held[b]];
-  // The measurements are fitted data: they narrow the fitted parameters' uncertainty.
-  std::vector<std::string> names;
-  for (const Key& key : keys) names.push_back(key.key);
-  const MeasurementRows meas = measurement_rows(data, after.params, names);
-  Eigen::MatrixXd Xm(X.rows() + meas.sensitivity.rows(), k);
-  Xm << X, meas.sensitivity;
-  return held_out_chi_square(r, G, Xm);
 }
 
 }  // namespace
@@ -671,11 +533,11 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   // Fresh seeds: the fitted parameters before and after, simulated directly on other runs.
   const std::vector<Prediction> fresh =
       ev.evaluate({out.before.params, out.after.params}, data.seed + def.fresh_seed_offset, data.model_replicates);
-  out.before.fitted_fresh = measure(data, fresh[0], out.before.params, false, n_free);
-  out.before.held_out_fresh = measure(data, fresh[0], out.before.params, true, n_free);
+  out.before.fitted_fresh = error_measures(data, fresh[0], out.before.params, false, n_free);
+  out.before.held_out_fresh = error_measures(data, fresh[0], out.before.params, true, n_free);
   const int k_final = n_free + static_cast<int>(out.effects.size());
-  out.after.fitted_fresh = measure(data, fresh[1], out.after.params, false, k_final);
-  out.after.held_out_fresh = measure(data, fresh[1], out.after.params, true, k_final);
+  out.after.fitted_fresh = error_measures(data, fresh[1], out.after.params, false, k_final);
+  out.after.held_out_fresh = error_measures(data, fresh[1], out.after.params, true, k_final);
   out.before.simulated_fresh = fresh[0];
   out.after.simulated_fresh = fresh[1];
 

@@ -1,0 +1,39 @@
+// The errors before and after: what calibrate reports of a state on its fitted and held-out points,
+// and the held-out tests of the keep rule and of the verdict (calibrate/decisions.hpp, rules 2 and 3).
+#pragma once
+
+#include "calibrate/calibration.hpp"
+#include "calibrate/evaluator.hpp"
+#include "calibrate/fit.hpp"
+
+#include <vector>
+
+namespace gapflow {
+
+// Data minus model over the total standard error, on the fit scale (every point; an invalid
+// model point counts as 10 sigma).
+std::vector<double> whitened_residual(const DataFile& data, const Prediction& p);
+
+// RMSE, RMS of the whitened residual and chi^2 over the fitted (held_out false) or held-out points.
+// `params` are the parameters behind `p`: on the fitted points the free parameters' measurements
+// join the chi^2 (one degree of freedom each), not the RMSE or the RMS (those are the points').
+ErrorMeasures error_measures(const DataFile& data, const Prediction& p, const ParameterSet& params, bool held_out,
+                             int fitted_parameters);
+
+// A state's residuals, errors and BIC at `params` with prediction `p`.
+ModelState make_state(const DataFile& data, const ParameterSet& params, const Prediction& p, int fitted_parameters);
+
+struct HeldOutCheck {
+  int n = 0;                     // held-out points
+  double before = 0, after = 0;  // their chi^2, direct simulation on the keep test's own seeds
+};
+
+// The keep test's held-out comparison of two parameter sets (decisions.hpp, rule 2).
+HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const ParameterSet& before,
+                            const ParameterSet& after);
+
+// The verdict's held-out chi^2 on fresh seeds with the fitted parameters' uncertainty (rule 3).
+ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const ModelState& after,
+                             const Prediction& fresh);
+
+}  // namespace gapflow
