@@ -13,12 +13,6 @@
 
 namespace gapflow {
 
-namespace {
-
-constexpr double kInvalidResidual = 10.0;  // a point the model cannot produce counts as 10 sigma
-
-}  // namespace
-
 HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const ParameterSet& before,
                             const ParameterSet& after) {
   HeldOutCheck c;
@@ -35,19 +29,6 @@ HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Eva
   c.before = chi2_of(data, p[0], true);
   c.after = chi2_of(data, p[1], true);
   return c;
-}
-
-// Data minus model over the total standard error, on the fit scale (every point).
-std::vector<double> whitened_residual(const DataFile& data, const Prediction& p) {
-  std::vector<double> w;
-  for (std::size_t i = 0; i < data.points.size(); ++i) {
-    if (!p.valid[i]) {
-      w.push_back(kInvalidResidual);
-      continue;
-    }
-    w.push_back((data.fit_value(i) - p.fit[i]) / total_sigma(data, p, i));
-  }
-  return w;
 }
 
 // `params` are the parameters behind `p`: on the fitted points the free parameters' measurements

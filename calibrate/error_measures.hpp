@@ -10,10 +10,6 @@
 
 namespace gapflow {
 
-// Data minus model over the total standard error, on the fit scale (every point; an invalid
-// model point counts as 10 sigma).
-std::vector<double> whitened_residual(const DataFile& data, const Prediction& p);
-
 // RMSE, RMS of the whitened residual and chi^2 over the fitted (held_out false) or held-out points.
 // `params` are the parameters behind `p`: on the fitted points the free parameters' measurements
 // join the chi^2 (one degree of freedom each), not the RMSE or the RMS (those are the points').

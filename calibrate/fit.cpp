@@ -1,11 +1,12 @@
 #include "calibrate/fit.hpp"
 
+#include "common/statistics.hpp"
+
 #include <fmt/format.h>
 #include <nlopt.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
 
 namespace gapflow {
@@ -21,11 +22,7 @@ double model_noise_share(const DataFile& data, const Prediction& p) {
     const double model = p.se_fit[i] * p.se_fit[i], total = std::pow(total_sigma(data, p, i), 2);
     if (total > 0 && std::isfinite(total)) share.push_back(model / total);
   }
-  if (share.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const auto mid = share.begin() + static_cast<std::ptrdiff_t>(share.size() / 2);
-  std::nth_element(share.begin(), mid, share.end());
-  if (share.size() % 2 == 1) return *mid;
-  return 0.5 * (*mid + *std::max_element(share.begin(), mid));
+  return median(std::move(share));  // NaN when empty
 }
 
 namespace {
@@ -42,6 +39,12 @@ PointResidual point_residual(const DataFile& data, const Prediction& p, std::siz
 }
 
 }  // namespace
+
+std::vector<double> whitened_residual(const DataFile& data, const Prediction& p) {
+  std::vector<double> w;
+  for (std::size_t i = 0; i < data.points.size(); ++i) w.push_back(point_residual(data, p, i).whitened);
+  return w;
+}
 
 double chi2_of(const DataFile& data, const Prediction& p, bool held_out) {
   double chi2 = 0;
@@ -172,17 +175,17 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
   // point's uncertainty by the pooled lack of fit.
   // Logged (fit_baseline): in four of blind pass 15's twins it was 0.82-0.95, so no widening, at 6 and at 12
   // model replicates alike.
-  if (lack_dof > 0) s.lack_of_fit = lack_sum / lack_dof, s.lack_of_fit_measured = true;
-  for (Eigen::MatrixXd& c : s.cov) c *= std::max(1.0, s.lack_of_fit);
+  if (lack_dof > 0) s.lack_of_fit = lack_sum / lack_dof;
+  for (Eigen::MatrixXd& c : s.cov) c *= std::max(1.0, s.lack_of_fit.value_or(1.0));
   return s;
 }
 
 // The pooled lack of fit as the log gives it: a variance ratio (reduced chi^2 of the nodes about the
 // quadratic); the coefficients' covariance is scaled by it where it exceeds 1, their se by its root.
 std::string lack_of_fit_text(const Surface& s) {
-  if (!s.lack_of_fit_measured) return "";
-  return fmt::format("; lack of fit (reduced chi2 of the nodes about it) {:.2f}{}", s.lack_of_fit,
-                     s.lack_of_fit > 1 ? ", its variance widened by that" : "");
+  if (!s.lack_of_fit) return "";
+  return fmt::format("; lack of fit (reduced chi2 of the nodes about it) {:.2f}{}", *s.lack_of_fit,
+                     *s.lack_of_fit > 1 ? ", its variance widened by that" : "");
 }
 
 struct Var {

@@ -20,6 +20,7 @@
 #include <Eigen/Dense>
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,9 @@ using Say = std::function<void(const std::string&)>;
 // The total standard error of point i's residual on the fit scale (data and model
 // added in quadrature; the data's value there: DataFile::fit_value).
 double total_sigma(const DataFile& data, const Prediction& p, std::size_t i);
+// Data minus model over total_sigma, on the fit scale, at every point; an invalid model point
+// counts as 10 sigma (as in chi2_of and the fits' deviance).
+std::vector<double> whitened_residual(const DataFile& data, const Prediction& p);
 // The model's share of the residual's variance, se_model^2 / (se_data^2 + se_model^2), median over
 // the fitted points where the model is valid (NaN with none). Every test of the loop weighs the
 // residual by both: where the model's share is large, its own noise, not the data's, limits what
@@ -96,8 +100,8 @@ struct Surface {
   std::vector<Eigen::MatrixXd> cov;   // per point: covariance of coef
   std::vector<bool> valid;            // every node gave a value at this point
   std::vector<EffectTerm> effects;    // added (fitted) effects
-  double lack_of_fit = 1;             // pooled reduced chi^2 of the nodes about the quadratic (> 1: cov widened by it)
-  bool lack_of_fit_measured = false;  // some point had more nodes than coefficients
+  std::optional<double> lack_of_fit;  // pooled reduced chi^2 of the nodes about the quadratic (> 1: cov widened by it);
+                                      // none where no point had more nodes than coefficients
 
   // Value, fit-scale value and its se at each point; params hold free keys and effect keys.
   Prediction predict(const ParameterSet& params, const DataFile& data) const;
