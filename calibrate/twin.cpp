@@ -6,6 +6,7 @@
 #include "common/random.hpp"
 #include "common/statistics.hpp"
 #include "common/text_file.hpp"
+#include "common/toml_spelling.hpp"
 #include "common/toml_strict.hpp"
 
 #include <Eigen/Dense>
@@ -31,8 +32,6 @@ double drawn_size(const EffectDef& e, double neutral, const std::string& size, R
   if (size == "high") f = rng.uniform(0.7, 1.0);
   return neutral + f * (end - neutral);
 }
-
-std::string toml_quote(const std::string& s) { return fmt::format("\"{}\"", s); }
 
 void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, const TwinTruth& truth, const Prediction& p,
                      const std::filesystem::path& data_out) {

@@ -8,7 +8,7 @@
 #include "common/scenario_loader.hpp"
 
 #include "common/input_bounds.hpp"
-#include "common/random.hpp"
+#include "common/scenario_section.hpp"
 #include "common/text_file.hpp"
 #include "common/toml_parse.hpp"
 
@@ -17,7 +17,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -54,202 +53,10 @@ ScenarioInvalid::ScenarioInvalid(std::string key_, std::string value_, std::stri
 
 namespace {
 
-// ---------------------------------------------------------------- value text
-
-// Shortest text that reads back to the same double, spelled as a TOML float
-// (a bare "1000" would read back as an integer).
-std::string toml_double(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buf[64];
-  auto end = std::to_chars(buf, buf + sizeof buf, v).ptr;
-  std::string s(buf, end);
-  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
-  return s;
-}
-
-std::string toml_quote(std::string_view s) {
-  std::string out = "\"";
-  for (unsigned char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
-      default:
-        if (c < 0x20 || c == 0x7F)
-          out += fmt::format("\\u{:04X}", static_cast<unsigned>(c));
-        else
-          out += static_cast<char>(c);
-    }
-  }
-  return out + "\"";
-}
-
-// The value as TOML would spell it, for error messages.
-std::string value_text(const toml::node& n) {
-  if (auto s = n.as_string()) return toml_quote(s->get());
-  if (auto i = n.as_integer()) return std::to_string(i->get());
-  if (auto f = n.as_floating_point()) return toml_double(f->get());
-  if (auto b = n.as_boolean()) return b->get() ? "true" : "false";
-  if (auto a = n.as_array()) {
-    std::string out = "[";
-    for (std::size_t k = 0; k < a->size(); ++k) out += (k ? ", " : "") + value_text(*a->get(k));
-    return out + "]";
-  }
-  if (n.is_table()) return "{...}";
-  std::ostringstream os;  // dates and times
-  n.visit([&](auto&& v) { os << v; });
-  return os.str();
-}
-
-// ---------------------------------------------------------------- reader
-
-struct Reader {
-  std::string source;
-  std::map<std::string, SourceLocation> overridden;  // keys (and tables) written by --set
-  SourceMap where;
-
-  SourceLocation locate(const std::string& key, const toml::node& n) const {
-    if (auto it = overridden.find(key); it != overridden.end()) return it->second;
-    const auto& begin = n.source().begin;
-    if (begin.line == 0) return {source, 1, 1};
-    return {source, static_cast<int>(begin.line), static_cast<int>(begin.column)};
-  }
-};
-
-std::string join_dotted(const std::string& path, std::string_view key) {
-  return path.empty() ? std::string(key) : path + "." + std::string(key);
-}
-
-// One table of the scenario. Every accessor registers its key as allowed.
-class Section {
- public:
-  Section(Reader& r, const toml::table* t, std::string path) : r_(r), t_(t), path_(std::move(path)) {}
-
-  const std::string& path() const { return path_; }
-  bool present() const { return t_ != nullptr; }
-  std::string dotted(std::string_view key) const { return join_dotted(path_, key); }
-
-  // The node of `key`, or nullptr. Records where it was set.
-  const toml::node* get(std::string_view key) {
-    allowed_.emplace_back(key);
-    const toml::node* n = t_ ? t_->get(key) : nullptr;
-    if (n) r_.where[dotted(key)] = r_.locate(dotted(key), *n);
-    return n;
-  }
-  // A key that is allowed but not used (shape-specific keys of another shape).
-  void ignore(std::string_view key) { get(key); }
-
-  bool set(std::string_view key) const { return r_.where.count(dotted(key)) > 0; }
-  // Where this section starts; the top of the file for the root or an absent section.
-  SourceLocation section_location() const {
-    if (auto it = r_.where.find(path_); !path_.empty() && it != r_.where.end()) return it->second;
-    return {r_.source, 1, 1};
-  }
-  // Where `key` was set; else where its section starts.
-  SourceLocation location(std::string_view key) const {
-    if (auto it = r_.where.find(dotted(key)); it != r_.where.end()) return it->second;
-    return section_location();
-  }
-
-  [[noreturn]] void fail(std::string_view key, const toml::node& n, const std::string& allowed) const {
-    throw ScenarioError(r_.locate(dotted(key), n), dotted(key), value_text(n), allowed);
-  }
-  // A check between keys: blame `key`, shown with `value` (its current value).
-  [[noreturn]] void fail_value(std::string_view key, const std::string& value, const std::string& allowed,
-                               std::string_view fallback_key = {}) const {
-    bool given = set(key);
-    SourceLocation at = given || fallback_key.empty() ? location(key) : location(fallback_key);
-    throw ScenarioError(at, dotted(key), given ? value : value + " (default)", allowed);
-  }
-  [[noreturn]] void missing(std::string_view key, const std::string& allowed,
-                            std::optional<SourceLocation> at = std::nullopt) const {
-    throw ScenarioError(at ? *at : section_location(), dotted(key), "", allowed);
-  }
-
-  Section section(std::string_view key) {
-    const toml::node* n = get(key);
-    if (n && !n->is_table()) fail(key, *n, fmt::format("must be a table (section [{}])", dotted(key)));
-    return Section(r_, n ? n->as_table() : nullptr, dotted(key));
-  }
-
-  std::optional<double> number(std::string_view key, const Range& range) {
-    const toml::node* n = get(key);
-    if (!n) return std::nullopt;
-    std::string bounds = range.text();
-    std::string sep = bounds.empty() ? "" : " ";
-    if (!n->is_number()) fail(key, *n, "must be a number" + sep + bounds);
-    const double v = *number_value(*n);
-    if (!std::isfinite(v)) fail(key, *n, "must be a finite number" + sep + bounds);
-    if (!range.contains(v)) fail(key, *n, "must be " + bounds);
-    return v;
-  }
-  void number(std::string_view key, double& out, const Range& range) {
-    if (auto v = number(key, range)) out = *v;
-  }
-
-  std::optional<std::int64_t> integer_value(std::string_view key, std::int64_t lo,
-                                      std::int64_t hi = std::numeric_limits<std::int64_t>::max()) {
-    const toml::node* n = get(key);
-    if (!n) return std::nullopt;
-    std::string allowed = "must be " + int_range_text(lo, hi);
-    if (!n->is_integer()) fail(key, *n, allowed);
-    std::int64_t v = n->as_integer()->get();
-    if (v < lo || v > hi) fail(key, *n, allowed);
-    return v;
-  }
-  void integer(std::string_view key, int& out, std::int64_t lo,
-               std::int64_t hi = std::numeric_limits<int>::max()) {
-    if (auto v = integer_value(key, lo, hi)) out = static_cast<int>(*v);
-  }
-
-  void boolean(std::string_view key, bool& out) {
-    const toml::node* n = get(key);
-    if (!n) return;
-    if (!n->is_boolean()) fail(key, *n, "must be true or false");
-    out = n->as_boolean()->get();
-  }
-
-  std::optional<std::string> text(std::string_view key) {
-    const toml::node* n = get(key);
-    if (!n) return std::nullopt;
-    if (!n->is_string()) fail(key, *n, "must be a string");
-    return n->as_string()->get();
-  }
-
-  template <class E>
-  std::optional<E> choice(std::string_view key, std::initializer_list<std::pair<std::string_view, E>> options) {
-    const toml::node* n = get(key);
-    if (!n) return std::nullopt;
-    std::string names;
-    for (const auto& [name, value] : options) names += (names.empty() ? "" : ", ") + std::string(name);
-    if (!n->is_string()) fail(key, *n, "must be a string, one of: " + names);
-    for (const auto& [name, value] : options)
-      if (n->as_string()->get() == name) return value;
-    fail(key, *n, "one of: " + names);
-  }
-
-  // Unknown keys are errors that list what this section allows.
-  void finish() const {
-    if (!t_) return;
-    for (const auto& [k, n] : *t_) {
-      if (std::find(allowed_.begin(), allowed_.end(), k.str()) != allowed_.end()) continue;
-      std::string list;
-      for (const auto& a : allowed_) list += (list.empty() ? "" : ", ") + a;
-      std::string where = path_.empty() ? "at the top level" : "in [" + path_ + "]";
-      throw ScenarioError(r_.locate(dotted(k.str()), n), dotted(k.str()), value_text(n),
-                          fmt::format("unknown key; allowed {}: {}", where, list));
-    }
-  }
-
- private:
-  Reader& r_;
-  const toml::table* t_;
-  std::string path_;
-  std::vector<std::string> allowed_;
-};
+using scenario_reading::Reader;
+using scenario_reading::Section;
+using scenario_reading::join_dotted;
+using scenario_reading::value_text;
 
 // ---------------------------------------------------------------- sections
 
@@ -684,143 +491,6 @@ LoadedScenario parse_with(std::string_view text, std::string source, const std::
   return out;
 }
 
-// ---------------------------------------------------------------- canonical text
-
-class TomlWriter {
- public:
-  void section(std::string_view name) { out_ += fmt::format("{}[{}]\n", out_.empty() ? "" : "\n", name); }
-  void put(std::string_view key, double v) { line(key, toml_double(v)); }
-  void put(std::string_view key, bool v) { line(key, v ? "true" : "false"); }
-  void put(std::string_view key, int v) { line(key, std::to_string(v)); }
-  void put(std::string_view key, std::uint64_t v) { line(key, std::to_string(v)); }
-  void put(std::string_view key, const std::string& v) { line(key, toml_quote(v)); }
-  void put(std::string_view key, const char* v) { line(key, toml_quote(v)); }
-  void put(std::string_view key, const std::vector<Vec2>& v) {
-    std::string s = "[";
-    for (std::size_t i = 0; i < v.size(); ++i)
-      s += fmt::format("{}[{}, {}]", i ? ", " : "", toml_double(v[i].x), toml_double(v[i].y));
-    line(key, s + "]");
-  }
-  std::string str() && { return std::move(out_); }
-
- private:
-  void line(std::string_view key, const std::string& value) { out_ += fmt::format("{} = {}\n", key, value); }
-  std::string out_;
-};
-
-void write_shake(TomlWriter& w, std::string_view name, const ShakeDef& k) {
-  w.section(name);
-  w.put("enabled", k.enabled);
-  w.put("amplitude_mm", k.amplitude_mm);
-  w.put("direction_deg", k.direction_deg);
-  w.put("mirror", k.mirror);
-  w.put("decay_s", k.decay_s);
-  w.put("period_s", k.period_s);
-  w.put("start_s", k.start_s);
-  w.put("frequency_hz", k.frequency_hz);
-}
-
-void write_head(TomlWriter& w, const ScenarioDef& d) {
-  w.section("scenario");
-  w.put("name", d.name);
-  w.put("description", d.description);
-  w.section("plane");
-  w.put("incline_deg", d.plane.incline_deg);
-  w.put("length_mm", d.plane.length_mm);
-  w.put("width_mm", d.plane.width_mm);
-  // Keys added after results were stored are written only when set, so that older hashes stay valid.
-  if (d.plane.lateral_tilt_deg != 0) w.put("lateral_tilt_deg", d.plane.lateral_tilt_deg);
-  if (d.plane.cover_gap_mm != 0) w.put("cover_gap_mm", d.plane.cover_gap_mm);
-  w.section("bottleneck");
-  w.put("wall_angle_deg", d.bottleneck.wall_angle_deg);
-  w.put("gap_mm", d.bottleneck.gap_mm);
-  w.put("wall_thickness_mm", d.bottleneck.wall_thickness_mm);
-  if (d.bottleneck.gap_offset_mm != 0) w.put("gap_offset_mm", d.bottleneck.gap_offset_mm);
-}
-
-void write_particles(TomlWriter& w, const ParticlesDef& p, const ReleaseDef& r) {
-  w.section("particles");
-  w.put("count", p.count);
-  w.put("diameter_mm", p.diameter_mm);
-  w.put("size_scatter", p.size_scatter);
-  w.put("size_distribution", to_string(p.size_distribution));
-  w.put("density_kg_m3", p.density_kg_m3);
-  w.put("friction_particle", p.friction_particle);
-  w.put("friction_wall", p.friction_wall);
-  w.put("friction_base", p.friction_base);
-  w.put("restitution", p.restitution);
-  w.put("rolling_resistance", p.rolling_resistance);
-  w.put("spinning_friction_mm", p.spinning_friction_mm);
-  if (p.drag_per_s != 0) w.put("drag_per_s", p.drag_per_s);
-  if (p.quadratic_drag_per_m != 0) w.put("quadratic_drag_per_m", p.quadratic_drag_per_m);
-  w.section("release");
-  w.put("barrier_mm", r.barrier_mm);
-  w.put("settle_s", r.settle_s);
-  w.put("lattice_gap", r.lattice_gap);
-}
-
-void write_obstruction(TomlWriter& w, const ObstructionDef& o) {
-  w.section("obstruction");
-  // The preset is spelt as the shape so that it survives the round trip.
-  bool preset = o.shape == ObstructionShape::triangle && (o.preset == "A" || o.preset == "V");
-  w.put("shape", preset ? o.preset : std::string(to_string(o.shape)));
-  w.put("diameter_mm", o.diameter_mm);
-  w.put("side_mm", o.side_mm);
-  w.put("apex", to_string(o.apex));
-  w.put("vertices_mm", o.vertices_mm);
-  w.put("distance_mm", o.distance_mm);
-  w.put("reference", to_string(o.reference));
-  w.put("lateral_offset_mm", o.lateral_offset_mm);
-  if (o.corner_radius_mm != 0) w.put("corner_radius_mm", o.corner_radius_mm);
-}
-
-void write_protocol(TomlWriter& w, const ProtocolDef& p) {
-  w.section("protocol");
-  w.put("clog_breaking", to_string(p.clog_breaking));
-  w.put("reinject_passed", p.reinject_passed);
-  w.put("perturb_radius_d", p.perturb_radius_d);
-}
-
-void write_run(TomlWriter& w, const RunDef& r) {
-  w.section("run");
-  w.put("end", to_string(r.end));
-  w.put("time_limit_s", r.time_limit_s);
-  w.put("n_passed", r.n_passed);
-  w.put("clog_timeout_s", r.clog_timeout_s);
-  w.put("stop_after_no_flow_s", r.stop_after_no_flow_s);
-  w.put("stranded_max", r.stranded_max);
-  w.put("seed", r.seed);
-  w.put("replicate", r.replicate);
-}
-
-void write_model(TomlWriter& w, const ModelDef& m) {
-  w.section("model.box2d");
-  w.put("time_step_s", m.box2d.time_step_s);
-  w.put("velocity_iterations", m.box2d.velocity_iterations);
-  w.put("position_iterations", m.box2d.position_iterations);
-  w.put("sleeping", m.box2d.sleeping);
-  w.put("continuous_collision", m.box2d.continuous_collision);
-  w.put("engine_diameter", m.box2d.engine_diameter);
-  if (m.box2d.rolling_contact != 0) w.put("rolling_contact", m.box2d.rolling_contact);
-  // Written only when set, so that the hashes (job keys) of earlier scenarios stay what they were.
-  if (m.box2d.spin_inertia_factor != Box2DDef{}.spin_inertia_factor)
-    w.put("spin_inertia_factor", m.box2d.spin_inertia_factor);
-  w.section("model.box2d.rolling");
-  w.put("enabled", m.box2d.rolling.enabled);
-  w.put("inertia_factor", m.box2d.rolling.inertia_factor);
-  w.section("model.box2d.base_friction");
-  w.put("enabled", m.box2d.base_friction.enabled);
-  w.put("method", to_string(m.box2d.base_friction.method));
-  w.section("model.bullet");
-  w.put("time_step_s", m.bullet.time_step_s);
-  w.put("substeps", m.bullet.substeps);
-  w.put("solver_iterations", m.bullet.solver_iterations);
-  w.put("sleeping", m.bullet.sleeping);
-  w.put("engine_diameter", m.bullet.engine_diameter);
-  w.put("wall_height_d", m.bullet.wall_height_d);
-  w.put("collision_margin_d", m.bullet.collision_margin_d);
-}
-
 }  // namespace
 
 LoadedScenario parse_scenario(std::string_view text, std::string_view source_name,
@@ -849,29 +519,6 @@ ScenarioError locate(const ScenarioInvalid& e, const LoadedScenario& s) {
       return ScenarioError(it->second, e.key, value, e.allowed);
   }
   return ScenarioError({s.source, 1, 1}, e.key, value, e.allowed);
-}
-
-std::string canonical_toml(const ScenarioDef& def) {
-  TomlWriter w;
-  write_head(w, def);
-  write_particles(w, def.particles, def.release);
-  write_obstruction(w, def.obstruction);
-  write_shake(w, "shaking.walls", def.shaking.walls);
-  write_shake(w, "shaking.obstruction", def.shaking.obstruction);
-  write_protocol(w, def.protocol);
-  write_run(w, def.run);
-  write_model(w, def.model);
-  return std::move(w).str();
-}
-
-std::uint64_t scenario_hash(const ScenarioDef& def) {
-  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a 64 offset basis
-  for (unsigned char c : canonical_toml(def)) {
-    h ^= c;
-    h *= 0x100000001b3ull;  // FNV-1a 64 prime
-  }
-  // FNV-1a mixes its last bytes poorly; one SplitMix64 round spreads them.
-  return splitmix64(h);
 }
 
 }  // namespace gapflow
