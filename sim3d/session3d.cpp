@@ -1,21 +1,20 @@
 // Session3D: builds a Bullet world from a CompiledScenario and steps it.
 //
-// Sections: materials (pair look-up installed into Bullet's combiner hooks),
-// shapes (prisms extruded from the plane-frame polygons), bodies, the session's
-// stages (build, step, report, retire, reinject) and the test extras.
+// Sections: shapes (prisms extruded from the plane-frame polygons), bodies, the
+// session's stages (build, step, report, retire, reinject) and the test extras.
+// The materials and Bullet's combiner hooks are in materials3d.cpp.
 #include "sim3d/session3d.hpp"
 
 #include "sim3d/model3d.hpp"
 #include "sim3d/far_pairs.hpp"
+#include "sim3d/materials3d.hpp"
 #include "sim3d/solver3d.hpp"
 
 #include <btBulletDynamicsCommon.h>
-#include <BulletCollision/CollisionDispatch/btManifoldResult.h>
 #include <BulletCollision/CollisionDispatch/btSimulationIslandManager.h>
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <stdexcept>
 
 namespace gapflow {
@@ -23,118 +22,12 @@ namespace gapflow {
 // Types live in a named namespace: Session3D::World (external linkage) holds them.
 namespace bullet3d {
 
-// ---------------------------------------------------------------------------
-// Materials
-// ---------------------------------------------------------------------------
-
-// Marks (userIndex3) the bodies made here, so the combiner hooks leave any
-// other Bullet user in the process on Bullet's own rules.
-constexpr int kSessionBodyTag = 0x3D6A;
-
 // Engine mass of a sphere of the nominal diameter. Only mass ratios matter
 // (walls and board are immovable), but Bullet caps the rolling/spinning torque
 // impulse at rf * min(normal impulse, 1) (btSequentialImpulseConstraintSolver),
 // so impulses must stay far below 1: with 1e-3 a pile of 10^4 spheres leaning
 // on one contact still gives ~0.3 per step.
 constexpr double kNominalMass = 1e-3;
-
-// Pair values in engine units, looked up by surface kind.
-struct MaterialTable {
-  double friction[3][3] = {};   // Coulomb, [kind a][kind b]
-  double restitution = 0;       // every pair
-  double rolling_resistance = 0;// dimensionless, board only; rolling friction = this * sphere radius
-  double spinning = 0;          // engine length, every pair
-  // Bullet only builds the spinning constraint when the rolling value is > 0;
-  // this keeps it on when spinning friction is set but rolling resistance is 0
-  // (Solver3D then drops the two rolling rows capped at this floor).
-  double rolling_floor = 0;     // engine length
-};
-
-Surface3D kind_of(const btCollisionObject* o) { return static_cast<Surface3D>(o->getUserIndex()); }
-
-double sphere_radius(const btCollisionObject* o) {
-  const btCollisionShape* s = o->getCollisionShape();
-  if (s->getShapeType() != SPHERE_SHAPE_PROXYTYPE) return 0;
-  return static_cast<const btSphereShape*>(s)->getRadius();
-}
-
-// Radius of the sphere rolling on the board, 0 for any other pair: the
-// scenario's rolling_resistance is resistance from the board (as in the 2D
-// model), and skipping it elsewhere saves Bullet three solver rows per contact.
-double board_rolling_radius(Surface3D ka, double ra, Surface3D kb, double rb) {
-  if (ka == Surface3D::particle && kb == Surface3D::board) return ra;
-  if (kb == Surface3D::particle && ka == Surface3D::board) return rb;
-  return 0.0;
-}
-
-struct PairEngine {
-  double friction, restitution, rolling, spinning;  // rolling, spinning: engine length
-};
-
-PairEngine pair_values(const MaterialTable& t, Surface3D ka, double ra, Surface3D kb, double rb) {
-  PairEngine p{};
-  p.friction = t.friction[static_cast<int>(ka)][static_cast<int>(kb)];
-  p.restitution = t.restitution;
-  p.rolling = t.rolling_resistance * board_rolling_radius(ka, ra, kb, rb);
-  p.spinning = t.spinning;
-  if (p.rolling <= 0 && p.spinning > 0) p.rolling = t.rolling_floor;
-  return p;
-}
-
-const MaterialTable* table_of(const btCollisionObject* a, const btCollisionObject* b) {
-  if (a->getUserIndex3() != kSessionBodyTag || b->getUserIndex3() != kSessionBodyTag) return nullptr;
-  return static_cast<const MaterialTable*>(a->getUserPointer());
-}
-
-PairEngine pair_of(const MaterialTable& t, const btCollisionObject* a, const btCollisionObject* b) {
-  return pair_values(t, kind_of(a), sphere_radius(a), kind_of(b), sphere_radius(b));
-}
-
-// Bullet's combiner hooks (btManifoldResult.h), called when a contact point is
-// created. They replace the product rules (mu_a mu_b, e_a e_b, rf_a mu_b + rf_b mu_a)
-// that cannot express an arbitrary pair table (e.g. mu_pp = 0 with mu_pw > 0).
-btScalar combined_friction(const btCollisionObject* a, const btCollisionObject* b) {
-  const MaterialTable* t = table_of(a, b);
-  return t ? btScalar(pair_of(*t, a, b).friction) : btManifoldResult::calculateCombinedFriction(a, b);
-}
-btScalar combined_restitution(const btCollisionObject* a, const btCollisionObject* b) {
-  const MaterialTable* t = table_of(a, b);
-  return t ? btScalar(pair_of(*t, a, b).restitution) : btManifoldResult::calculateCombinedRestitution(a, b);
-}
-btScalar combined_rolling(const btCollisionObject* a, const btCollisionObject* b) {
-  const MaterialTable* t = table_of(a, b);
-  return t ? btScalar(pair_of(*t, a, b).rolling) : btManifoldResult::calculateCombinedRollingFriction(a, b);
-}
-btScalar combined_spinning(const btCollisionObject* a, const btCollisionObject* b) {
-  const MaterialTable* t = table_of(a, b);
-  return t ? btScalar(pair_of(*t, a, b).spinning) : btManifoldResult::calculateCombinedSpinningFriction(a, b);
-}
-
-// The hooks are process globals; they are stateless (the table comes from the
-// bodies), so installing them once serves every session, also in parallel runs.
-void install_combiner_hooks() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    gCalculateCombinedFrictionCallback = &combined_friction;
-    gCalculateCombinedRestitutionCallback = &combined_restitution;
-    gCalculateCombinedRollingFrictionCallback = &combined_rolling;
-    gCalculateCombinedSpinningFrictionCallback = &combined_spinning;
-  });
-}
-
-MaterialTable make_materials(const ParticlesDef& p, const EngineScaling& s) {
-  MaterialTable t;
-  const int P = static_cast<int>(Surface3D::particle), B = static_cast<int>(Surface3D::board),
-            W = static_cast<int>(Surface3D::wall);
-  t.friction[P][P] = p.friction_particle;
-  t.friction[P][W] = t.friction[W][P] = p.friction_wall;
-  t.friction[P][B] = t.friction[B][P] = p.friction_base;
-  t.restitution = p.restitution;
-  t.rolling_resistance = p.rolling_resistance;
-  t.spinning = s.to_engine_length(mm_to_m(p.spinning_friction_mm));
-  t.rolling_floor = 1e-12 * s.length;  // a rolling torque far below anything measurable
-  return t;
-}
 
 // ---------------------------------------------------------------------------
 // Shapes: prisms extruded normal to the board
