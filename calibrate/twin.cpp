@@ -66,7 +66,7 @@ void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, con
                                            to_string(d.points[i].observable), d.point_label(i)));
     const double se = d.points[i].scale == FitScale::log ? p.se_fit[i] * p.value[i] : p.se_fit[i];
     o << "[[point]]\n";
-    for (std::size_t c = 0; c < d.design.size(); ++c) o << d.design[c].column << " = " << d.points[i].design[c] << "\n";
+    for (std::size_t c = 0; c < d.design.size(); ++c) o << toml_key(d.design[c].column) << " = " << d.points[i].design[c] << "\n";
     if (d.points[i].observable != d.observable) o << "observable = \"" << to_string(d.points[i].observable) << "\"\n";
     o << fmt::format("value = {}\nuncertainty = {}\nreplicates = {}\nheld_out = {}\n\n", number_text(p.value[i]),
                      number_text(se), def.replicates, d.points[i].held_out ? "true" : "false");
@@ -263,9 +263,10 @@ std::vector<double> raw_model_se(const DataFile& design, const TwinDef& def, con
 // prediction is less noisy than any one node (at the middle of five nodes of equal noise, by
 // sqrt(17/35)), and whose noise is what it whitens with. Before, the oracle took the raw node's
 // noise and so understated what the loop sees (passes 8-14: the loop's baseline chi^2 beyond its
-// degrees of freedom ran 1.29 x the oracle's lambda, median over 114 twins; README, Calibration). The same surface is
-// built here from the oracle's nodes (def.replicates runs each) around node `near`, and its
-// standard error scaled to the design's model replicates.
+// degrees of freedom ran 1.29 x the oracle's lambda, median over 114 twins;
+// results/calibration-blind-passes.md, "The oracle's noise"). The same surface is built here
+// from the oracle's nodes (def.replicates runs each) around node `near`, and its standard error
+// scaled to the design's model replicates.
 std::vector<double> loop_model_se(const DataFile& design, const TwinDef& def, const std::vector<ParameterSet>& nodes,
                                   const std::vector<Prediction>& predictions, std::size_t near) {
   BaselineFit grid;

@@ -11,17 +11,14 @@
 #include "common/scenario_section.hpp"
 #include "common/text_file.hpp"
 #include "common/toml_parse.hpp"
+#include "common/toml_spelling.hpp"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
-#include <fstream>
-#include <limits>
 #include <optional>
-#include <sstream>
 #include <utility>
 
 namespace gapflow {

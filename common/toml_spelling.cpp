@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 
@@ -34,6 +36,13 @@ std::string toml_quote(std::string_view s) {
     }
   }
   return out + "\"";
+}
+
+std::string toml_key(std::string_view s) {
+  const bool bare = !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '-';
+  });
+  return bare ? std::string(s) : toml_quote(s);
 }
 
 }  // namespace gapflow

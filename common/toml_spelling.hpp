@@ -15,4 +15,7 @@ std::string toml_double(double v);
 // A TOML basic string: quotes, backslashes and control characters escaped.
 std::string toml_quote(std::string_view s);
 
+// A key as TOML spells it: bare when it is only A-Z a-z 0-9 _ -, else quoted.
+std::string toml_key(std::string_view s);
+
 }  // namespace gapflow

@@ -7,13 +7,12 @@
 #include "common/units.hpp"
 #include "sim3d/session3d.hpp"
 
-#include <LinearMath/btScalar.h>
 
 class btCollisionObject;
 
 namespace gapflow::bullet3d {
 
-// Marks (userIndex3) the bodies made here, so the combiner hooks leave any
+// Marks (userIndex3) the bodies Session3D makes, so the combiner hooks leave any
 // other Bullet user in the process on Bullet's own rules.
 constexpr int kSessionBodyTag = 0x3D6A;
 

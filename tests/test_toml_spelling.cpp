@@ -16,6 +16,7 @@ namespace {
 
 using gapflow::parse_scenario;
 using gapflow::toml_double;
+using gapflow::toml_key;
 using gapflow::toml_quote;
 
 // The paper's cylinder scenario with its [scenario] description replaced by `value_text`.
@@ -36,6 +37,14 @@ TEST(TomlSpelling, QuotedStringsReadBackUnchanged) {
   }
 }
 
+TEST(TomlSpelling, KeysAreBareOnlyWhenTomlAllowsIt) {
+  EXPECT_EQ(toml_key("W_over_d"), "W_over_d");
+  EXPECT_EQ(toml_key("gap-mm"), "gap-mm");
+  EXPECT_EQ(toml_key("W over d"), "\"W over d\"");
+  EXPECT_EQ(toml_key("gap.mm"), "\"gap.mm\"");  // bare, the dot would make a table
+  EXPECT_EQ(toml_key(""), "\"\"");
+}
+
 TEST(TomlSpelling, DoublesAreShortestFloatsThatReadBackExactly) {
   EXPECT_EQ(toml_double(1000.0), "1000.0");  // not "1000": TOML would read an integer
   EXPECT_EQ(toml_double(19.4), "19.4");
@@ -44,9 +53,10 @@ TEST(TomlSpelling, DoublesAreShortestFloatsThatReadBackExactly) {
   EXPECT_EQ(toml_double(std::nan("")), "nan");
   for (const double v : {0.1, 1.0 / 3.0, 6.02214076e23, 1e-300, -2.5e-7, 80.0})
     EXPECT_EQ(std::stod(toml_double(v)), v) << toml_double(v);
-  // Read by the loader as a float: an obstruction diameter spelled from a whole number.
-  const auto loaded = parse_scenario(cylinder_with_description("\"d\""), "spelling.toml", {"obstruction.diameter_mm=" + toml_double(81.0)});
+  // The canonical scenario text (what scenario_hash reads) spells a whole number as a float.
+  const auto loaded = parse_scenario(cylinder_with_description("\"d\""), "spelling.toml", {"obstruction.diameter_mm=81"});
   EXPECT_EQ(loaded.def.obstruction.diameter_mm, 81.0);
+  EXPECT_NE(gapflow::canonical_toml(loaded.def).find("\ndiameter_mm = 81.0\n"), std::string::npos);
 }
 
 }  // namespace
