@@ -5,6 +5,7 @@
 #include "calibrate/effect_responses.hpp"
 #include "calibrate/error_measures.hpp"
 #include "calibrate/fit.hpp"
+#include "calibrate/surface_noise.hpp"
 #include "common/statistics.hpp"
 #include "common/toml_strict.hpp"
 
@@ -519,6 +520,9 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
 
   out.model_noise_share = model_noise_share(data, out.before.prediction);
   loop.say(model_noise_text(out.model_noise_share, data.model_replicates));
+  const SurfaceNoiseCheck surface_noise = surface_noise_check(data, base);
+  out.surface_noise_ratio = surface_noise.median_ratio;
+  loop.say(surface_noise_text(surface_noise));
 
   const std::vector<std::string> correlations = shared_run_correlations(data, base);
   if (!correlations.empty())

@@ -519,6 +519,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   out.grid = grid;
   out.grid_predictions = preds;
   const std::size_t surface_nodes = window(data, out, grid[best]).size();
+  out.surface_at = grid[best];
   out.surface = surface_around(data, out, grid[best]);
   out.params = fit_surface(data, out.surface, grid[best]);
   // Signatures are taken at the (up to) three grid nodes nearest the fit.

@@ -119,6 +119,7 @@ struct BaselineFit {
   std::vector<ParameterSet> grid;     // every node of the baseline grid, all simulated (responses are measured
                                       // at the ones nearest a later fit: EffectResponses::reference_with)
   std::vector<Prediction> grid_predictions;
+  ParameterSet surface_at;            // the grid node `surface` is built around (the best by chi^2)
 };
 
 // The surface through the baseline grid's nodes around `at`, without effects: one free parameter,

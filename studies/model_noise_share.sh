@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The model's share of the residual's variance at the baseline fit (summary.json model_noise_share,
-# calibrate/fit.hpp) for each twin of a blind pass, at each model replicate count given: a calibration
+# calibrate/fit.hpp) and the surface noise check (surface_noise_ratio, calibrate/surface_noise.hpp)
+# for each twin of a blind pass, at each model replicate count given: a calibration
 # with --max-effects 0 (the baseline and its fresh-seed checks only) per twin and count, into
 # OUT/<replicates>/<case>/. With STORE holding the pass's runs at those counts (e.g. a copy of the
 # store of the pass's replay at 12), nothing is simulated and it takes seconds per twin; else runs.
@@ -36,4 +37,21 @@ for n in counts:
         continue
     print(f"{n} model replicates: the model's share of the variance at the baseline, median {statistics.median(v):.2f} "
           f"over {len(v)} 2D-made twins (range {min(v):.2f}-{max(v):.2f})")
+    ratio = {s.parent.name: json.load(open(s)).get("surface_noise_ratio") for s in (out / n).glob("*/summary.json")}
+    r = [x for case, x in ratio.items() if case not in made_by_3d and x is not None]
+    if r:
+        print(f"{n} model replicates: surface noise check (summary.json surface_noise_ratio: the replicates' own "
+              f"surfaces' spread over the reported variance, independent nodes ~1), median {statistics.median(r):.2f} "
+              f"over {len(r)} 2D-made twins (range {min(r):.2f}-{max(r):.2f})")
+    by = {}  # per observable, from each calibration's log line
+    for log in (out / n).glob("*.log"):
+        if log.stem in made_by_3d:
+            continue
+        for line in log.read_text().splitlines():
+            if "surface noise check" in line and "by observable: " in line:
+                for part in line.split("by observable: ")[1].split(". Above")[0].split(", "):
+                    name, value = part.rsplit(" ", 1)
+                    by.setdefault(name, []).append(float(value))
+    for name, v in sorted(by.items()):
+        print(f"  {name}: median {statistics.median(v):.2f} over {len(v)} twins (range {min(v):.2f}-{max(v):.2f})")
 PY
