@@ -521,7 +521,8 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.model_noise_share = model_noise_share(data, out.before.prediction);
   loop.say(model_noise_text(out.model_noise_share, data.model_replicates));
   const SurfaceNoiseCheck surface_noise = surface_noise_check(data, base);
-  out.surface_noise_ratio = surface_noise.median_ratio;
+  out.surface_noise_ratio = surface_noise.all.understated;
+  out.node_correlation = surface_noise.all.correlation;
   loop.say(surface_noise_text(surface_noise));
 
   const std::vector<std::string> correlations = shared_run_correlations(data, base);

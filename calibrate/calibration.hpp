@@ -148,8 +148,8 @@ struct CalibrationResult {
   double decisive_score_p = 0;     // CalibrationDef::decisive_score_p it ran with
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
   double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)
-  double surface_noise_ratio = NAN;  // the baseline's model variance from each replicate's own surface over the
-                                     // reported one, median over fitted points (surface_noise.hpp; diagnostic)
+  double surface_noise_ratio = NAN;  // the baseline's true model variance over what the surface reports, and
+  double node_correlation = NAN;     // the replicates' correlation between nodes it comes from (surface_noise.hpp)
   // The held-out points after everything (fresh seeds), their chi^2 with the fitted parameters'
   // uncertainty carried to them (attribution.hpp held_out_chi_square): the verdict's test.
   ChiSquare held_out_fresh_fit_aware;

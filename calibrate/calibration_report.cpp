@@ -85,8 +85,10 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
       measured += fmt::format("{}{{\"key\": {}, \"measured\": {}, \"se\": {}}}", measured.empty() ? "" : ", ",
                               json_string(f.key), json_number(f.measured), json_number(f.measured_se));
   o << "  \"measured_free\": [" << measured << "],\n";
-  o << fmt::format("  \"model_replicates\": {},\n  \"model_noise_share\": {},\n  \"surface_noise_ratio\": {},\n",
-                   data.model_replicates, json_number(r.model_noise_share), json_number(r.surface_noise_ratio));
+  o << fmt::format("  \"model_replicates\": {},\n  \"model_noise_share\": {},\n  \"surface_noise_ratio\": {},\n"
+                   "  \"node_correlation\": {},\n",
+                   data.model_replicates, json_number(r.model_noise_share), json_number(r.surface_noise_ratio),
+                   json_number(r.node_correlation));
   o << fmt::format("  \"contenders\": {},\n", r.contenders);
   o << fmt::format("  \"decisive_score_p\": {},\n", r.decisive_score_p);
   o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n  \"held_out_beyond_noise\": {},\n", json_string(r.verdict),

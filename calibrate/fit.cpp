@@ -461,10 +461,7 @@ bool nearest_same_node(const std::vector<ParameterSet>& nodes, const Surface& s,
   return nearest_nodes(nodes, s, a, 1) == nearest_nodes(nodes, s, b, 1);
 }
 
-namespace {
-
-// The grid nodes a surface around `at` goes through (surface_around).
-std::vector<std::size_t> window(const DataFile& data, const BaselineFit& base, const ParameterSet& at) {
+std::vector<std::size_t> surface_window(const DataFile& data, const BaselineFit& base, const ParameterSet& at) {
   std::vector<std::size_t> all(base.grid.size());
   std::iota(all.begin(), all.end(), 0);
   if (data.free.size() != 1 || base.grid.size() <= 5) return all;
@@ -478,12 +475,10 @@ std::vector<std::size_t> window(const DataFile& data, const BaselineFit& base, c
   return {first, first + 1, first + 2, first + 3, first + 4};
 }
 
-}  // namespace
-
 Surface surface_around(const DataFile& data, const BaselineFit& base, const ParameterSet& at) {
   std::vector<ParameterSet> nodes;  // without free parameters the grid is one empty set: the surface is a constant
   std::vector<Prediction> preds;
-  for (std::size_t k : window(data, base, at)) nodes.push_back(base.grid[k]), preds.push_back(base.grid_predictions[k]);
+  for (std::size_t k : surface_window(data, base, at)) nodes.push_back(base.grid[k]), preds.push_back(base.grid_predictions[k]);
   return build_surface(data, nodes, preds);
 }
 
@@ -518,7 +513,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
     say(fmt::format("  {}: chi2 = {:.2f}{}", grid[k].label(), chi2[k], k == best ? "  <- best node" : ""));
   out.grid = grid;
   out.grid_predictions = preds;
-  const std::size_t surface_nodes = window(data, out, grid[best]).size();
+  const std::size_t surface_nodes = surface_window(data, out, grid[best]).size();
   out.surface_at = grid[best];
   out.surface = surface_around(data, out, grid[best]);
   out.params = fit_surface(data, out.surface, grid[best]);

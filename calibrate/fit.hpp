@@ -128,6 +128,8 @@ struct BaselineFit {
 // runs. A fit is bounded to its surface's nodes; an effect's joint fit that ends at that bound is
 // fitted again on the surface around where it stopped (calibration.cpp, fit_trial).
 Surface surface_around(const DataFile& data, const BaselineFit& base, const ParameterSet& at);
+// The indices in base.grid of the nodes surface_around(data, base, at) goes through.
+std::vector<std::size_t> surface_window(const DataFile& data, const BaselineFit& base, const ParameterSet& at);
 // Whether `p` sits on one of `s`'s bounds in a free parameter where the baseline grid goes further.
 bool at_inner_bound(const Surface& s, const BaselineFit& base, const ParameterSet& p);
 

@@ -12,89 +12,121 @@ namespace gapflow {
 
 namespace {
 
-constexpr double kSurfaceNoiseNote = 1.5;  // well above the 0.8-1.2 of independent nodes
+constexpr double kUnderstatedNote = 1.5;  // independent nodes: about 1 (tests/test_surface_noise.cpp)
 
-// A node's replicate values at point i, when it has exactly `n` finite ones.
-bool complete(const Prediction& p, std::size_t i, std::size_t n) {
-  if (!p.valid[i] || p.replicate_fit[i].size() != n) return false;
-  for (double v : p.replicate_fit[i])
-    if (!std::isfinite(v)) return false;
+// Every replicate of point i finite at every node, and `n` of them.
+bool complete(const std::vector<Prediction>& nodes, std::size_t i, std::size_t n) {
+  for (const Prediction& p : nodes) {
+    if (!p.valid[i] || p.replicate_fit[i].size() != n) return false;
+    for (double v : p.replicate_fit[i])
+      if (!std::isfinite(v)) return false;
+  }
   return true;
 }
 
-// The baseline's nodes with every node of a point weighted alike, by the point's variance pooled
-// over the nodes (so the fit is ordinary least squares and its reported variance unbiased for
-// independent nodes), and with replicate r's values in place of the means (r < 0: the means).
-BaselineFit equally_weighted(const BaselineFit& base, int r) {
-  BaselineFit b;
-  b.grid = base.grid;
-  b.grid_predictions = base.grid_predictions;
-  const std::size_t points = base.grid_predictions.front().fit.size();
+// The window's nodes with replicate r's values (r < 0: their mean), every node of a point weighted by
+// the point's replicate variance pooled over the nodes, on the fit scale of the replicates themselves.
+BaselineFit replicate_nodes(const BaselineFit& window, std::size_t points, std::size_t n, int r) {
+  BaselineFit b = window;
   for (std::size_t i = 0; i < points; ++i) {
     double pooled = 0;
-    for (const Prediction& p : base.grid_predictions) pooled += p.se_fit[i] * p.se_fit[i];
-    pooled = std::sqrt(pooled / static_cast<double>(base.grid_predictions.size()));
+    for (const Prediction& p : window.grid_predictions)
+      if (p.replicate_fit[i].size() == n) pooled += std::pow(summarize(p.replicate_fit[i]).se(), 2);
+    pooled = std::sqrt(pooled / static_cast<double>(window.grid_predictions.size()));
     for (Prediction& p : b.grid_predictions) {
-      p.se_fit[i] = pooled;
-      if (r >= 0 && static_cast<std::size_t>(r) < p.replicate_fit[i].size()) p.fit[i] = p.replicate_fit[i][static_cast<std::size_t>(r)];
+      p.se_fit[i] = pooled > 0 ? pooled : 1;
+      if (p.replicate_fit[i].size() != n) continue;
+      p.fit[i] = r >= 0 ? p.replicate_fit[i][static_cast<std::size_t>(r)] : summarize(p.replicate_fit[i]).mean;
     }
   }
   return b;
+}
+
+// The variance the surface reports at point i without its lack-of-fit widening (fit.cpp, build_surface).
+double unwidened_variance(const Surface& s, const Prediction& p, std::size_t i) {
+  return p.se_fit[i] * p.se_fit[i] / std::max(1.0, s.lack_of_fit.value_or(1.0));
+}
+
+struct Sums {
+  int points = 0;
+  double spread = 0, reported = 0;  // summed over the points, at the window's middle node
+};
+
+SurfaceNoiseGroup estimate(std::string name, const Sums& s, double h_middle, double h_fit) {
+  SurfaceNoiseGroup g;
+  g.name = std::move(name);
+  g.points = s.points;
+  if (s.points == 0 || !(s.reported > 0) || !(h_middle < 1)) return g;
+  g.correlation = (s.spread / s.reported - 1) / (1 / h_middle - 1);
+  g.understated = 1 + g.correlation * (1 / h_fit - 1);
+  return g;
 }
 
 }  // namespace
 
 SurfaceNoiseCheck surface_noise_check(const DataFile& data, const BaselineFit& base) {
   SurfaceNoiseCheck c;
-  if (base.grid_predictions.empty()) return c;
-  const std::size_t n = static_cast<std::size_t>(data.model_replicates);
   c.replicates = data.model_replicates;
-  if (n < 3) return c;
-  // Replicate r's surface, evaluated at the baseline fit; and the variance the same surface
-  // through the means reports.
-  std::vector<Prediction> per_replicate;
+  const std::size_t n = static_cast<std::size_t>(data.model_replicates);
+  if (n < 3) return c.problem = "fewer than 3 model replicates", c;
+  if (data.free.size() != 1) return c.problem = "not one free parameter", c;
+  BaselineFit window;
+  for (std::size_t k : surface_window(data, base, base.surface_at))
+    window.grid.push_back(base.grid[k]), window.grid_predictions.push_back(base.grid_predictions[k]);
+  c.nodes = static_cast<int>(window.grid.size());
+  if (c.nodes < 4) return c.problem = "fewer than 4 nodes in the window", c;
+  const ParameterSet middle = window.grid[window.grid.size() / 2];
+  const std::size_t points = data.points.size();
+
+  std::vector<Prediction> per_replicate;  // each replicate's surface, at the window's middle node
   for (std::size_t r = 0; r < n; ++r)
     per_replicate.push_back(
-        surface_around(data, equally_weighted(base, static_cast<int>(r)), base.surface_at).predict_fit(base.params));
-  const Prediction reported = surface_around(data, equally_weighted(base, -1), base.surface_at).predict_fit(base.params);
-  std::vector<double> all;
-  std::map<std::string, std::vector<double>> by_observable;
-  for (std::size_t i = 0; i < data.points.size(); ++i) {
-    if (data.points[i].held_out || !reported.valid[i] || !(reported.se_fit[i] > 0)) continue;
-    bool usable = true;
-    for (const Prediction& p : base.grid_predictions) usable = usable && complete(p, i, n);
-    if (!usable) continue;
+        surface_around(data, replicate_nodes(window, points, n, static_cast<int>(r)), middle).predict_fit(middle));
+  const BaselineFit means = replicate_nodes(window, points, n, -1);
+  const Surface mean_surface = surface_around(data, means, middle);
+  const Prediction at_middle = mean_surface.predict_fit(middle), at_fit = mean_surface.predict_fit(base.params);
+
+  Sums all;
+  std::map<std::string, Sums> by_observable;
+  double h_middle = NAN, h_fit = NAN;
+  for (std::size_t i = 0; i < points; ++i) {
+    if (data.points[i].held_out || !complete(window.grid_predictions, i, n)) continue;
+    const double reported = unwidened_variance(mean_surface, at_middle, i);
+    if (!(reported > 0)) continue;
     std::vector<double> fits;
     for (const Prediction& p : per_replicate) fits.push_back(p.fit[i]);
-    const double spread = summarize(fits).se();  // the replicate fits' mean is the surface's own prediction
-    const double ratio = spread * spread / (reported.se_fit[i] * reported.se_fit[i]);
-    all.push_back(ratio);
-    by_observable[to_string(data.points[i].observable)].push_back(ratio);
+    const double spread = std::pow(summarize(fits).se(), 2);
+    // One free parameter and every node of a point weighted alike: the leverage is the same at every point.
+    const double pooled = std::pow(means.grid_predictions.front().se_fit[i], 2);  // a node's variance
+    h_middle = reported / pooled;
+    h_fit = unwidened_variance(mean_surface, at_fit, i) / pooled;
+    for (Sums* s : {&all, &by_observable[to_string(data.points[i].observable)]})
+      ++s->points, s->spread += spread, s->reported += reported;
   }
-  c.points = static_cast<int>(all.size());
-  if (all.empty()) return c;
-  c.median_ratio = median(std::move(all));
-  for (auto& [name, v] : by_observable) c.by_observable.emplace_back(name, median(std::move(v)));
+  if (all.points == 0) return c.problem = "no fitted point has every model replicate at every node", c;
+  c.all = estimate("all", all, h_middle, h_fit);
+  for (const auto& [name, sums] : by_observable) c.by_observable.push_back(estimate(name, sums, h_middle, h_fit));
   return c;
 }
 
 std::string surface_noise_text(const SurfaceNoiseCheck& c) {
-  if (c.points == 0)
-    return "surface noise check: no fitted point has a value in every model replicate at every node";
+  if (!c.problem.empty()) return "surface noise check: not made (" + c.problem + ")";
   std::string s = fmt::format(
-      "surface noise check: at the baseline, the spread of the surfaces fitted to each model replicate alone is "
-      "{:.2f} x the variance the surface reports (median over {} fitted points; independent nodes give about 1)",
-      c.median_ratio, c.points);
+      "surface noise check: the model replicates correlate {:+.2f} between grid nodes (from the spread of a surface "
+      "fitted to each replicate alone, {} fitted points; independent nodes give about 0), so at the baseline the "
+      "surface understates the model's variance {:.2f} x",
+      c.all.correlation, c.all.points, c.all.understated);
   std::vector<std::string> parts, high;
-  for (const auto& [name, ratio] : c.by_observable) {
-    parts.push_back(fmt::format("{} {:.2f}", name, ratio));
-    if (ratio > kSurfaceNoiseNote) high.push_back(name);
+  for (const SurfaceNoiseGroup& g : c.by_observable) {
+    parts.push_back(fmt::format("{} {:+.2f} ({:.2f} x)", g.name, g.correlation, g.understated));
+    if (g.understated > kUnderstatedNote) high.push_back(g.name);
   }
   if (c.by_observable.size() > 1) s += fmt::format("; by observable: {}", fmt::join(parts, ", "));
   if (!high.empty())
-    s += fmt::format(". Above {:.1f} ({}): the same seeds at every node keep those replicates correlated between "
-                     "nodes, and the loop's tests understate the model's noise there (README, Calibration, limits)",
-                     kSurfaceNoiseNote, fmt::join(high, ", "));
+    s += fmt::format(". Above {:.1f} x ({}): the same seeds at every node keep those replicates correlated between "
+                     "nodes, and the loop's tests take the model's noise there as smaller than it is (README, "
+                     "Calibration, limits)",
+                     kUnderstatedNote, fmt::join(high, ", "));
   return s;
 }
 

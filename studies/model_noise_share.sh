@@ -37,21 +37,26 @@ for n in counts:
         continue
     print(f"{n} model replicates: the model's share of the variance at the baseline, median {statistics.median(v):.2f} "
           f"over {len(v)} 2D-made twins (range {min(v):.2f}-{max(v):.2f})")
-    ratio = {s.parent.name: json.load(open(s)).get("surface_noise_ratio") for s in (out / n).glob("*/summary.json")}
-    r = [x for case, x in ratio.items() if case not in made_by_3d and x is not None]
-    if r:
-        print(f"{n} model replicates: surface noise check (summary.json surface_noise_ratio: the replicates' own "
-              f"surfaces' spread over the reported variance, independent nodes ~1), median {statistics.median(r):.2f} "
-              f"over {len(r)} 2D-made twins (range {min(r):.2f}-{max(r):.2f})")
-    by = {}  # per observable, from each calibration's log line
+    for field, what in (("node_correlation", "the model replicates' correlation between grid nodes (independent: ~0)"),
+                        ("surface_noise_ratio", "how much the surface understates the model's variance at the baseline")):
+        got = {s.parent.name: json.load(open(s)).get(field) for s in (out / n).glob("*/summary.json")}
+        r = [x for case, x in got.items() if case not in made_by_3d and x is not None]
+        if r:
+            print(f"{n} model replicates: surface noise check, {what} ({field}), median {statistics.median(r):.2f} "
+                  f"over {len(r)} 2D-made twins (range {min(r):.2f}-{max(r):.2f})")
+    by = {}  # per observable, from each calibration's log line: name rho (factor x)
     for log in (out / n).glob("*.log"):
         if log.stem in made_by_3d:
             continue
         for line in log.read_text().splitlines():
             if "surface noise check" in line and "by observable: " in line:
                 for part in line.split("by observable: ")[1].split(". Above")[0].split(", "):
-                    name, value = part.rsplit(" ", 1)
-                    by.setdefault(name, []).append(float(value))
+                    name, rho, factor = part.replace("(", "").replace(" x)", "").split(" ")
+                    by.setdefault(name, []).append((float(rho), float(factor)))
     for name, v in sorted(by.items()):
-        print(f"  {name}: median {statistics.median(v):.2f} over {len(v)} twins (range {min(v):.2f}-{max(v):.2f})")
+        rho, factor = zip(*v)
+        flagged = sum(f > 1.5 for f in factor)
+        print(f"  {name}: correlation median {statistics.median(rho):+.2f} (range {min(rho):+.2f} to {max(rho):+.2f}); "
+              f"understated median {statistics.median(factor):.2f} x (range {min(factor):.2f}-{max(factor):.2f}), "
+              f"above 1.5 in {flagged} of {len(v)} twins")
 PY
