@@ -174,7 +174,9 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
   // Where the quadratic does not follow the nodes within their noise, widen every
   // point's uncertainty by the pooled lack of fit.
   // Logged (fit_baseline): in four of blind pass 15's twins it was 0.82-0.95, so no widening, at 6 and at 12
-  // model replicates alike.
+  // model replicates alike. Pooled over observables it is pulled below 1 by the time to the first
+  // crossing, whose nodes share their seeds' error (lack of fit 0.48 at 6; calibrate/surface_noise.hpp),
+  // while J_mid's alone is about 1.16 (calibrate/surface_noise_check.py).
   if (lack_dof > 0) s.lack_of_fit = lack_sum / lack_dof;
   for (Eigen::MatrixXd& c : s.cov) c *= std::max(1.0, s.lack_of_fit.value_or(1.0));
   return s;

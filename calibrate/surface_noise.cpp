@@ -66,7 +66,6 @@ SurfaceNoiseGroup estimate(std::string name, const Sums& s, double h_middle, dou
 
 SurfaceNoiseCheck surface_noise_check(const DataFile& data, const BaselineFit& base) {
   SurfaceNoiseCheck c;
-  c.replicates = data.model_replicates;
   const std::size_t n = static_cast<std::size_t>(data.model_replicates);
   if (n < 3) return c.problem = "fewer than 3 model replicates", c;
   if (data.free.size() != 1) return c.problem = "not one free parameter", c;

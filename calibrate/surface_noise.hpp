@@ -11,8 +11,9 @@
 // times a node's, 17/35 for five nodes, while a shared error passes whole). With a correlation rho
 // between any two nodes' replicates, spread / reported = 1 + rho (1/h - 1): that gives rho. The
 // factor by which the surface understates the model's variance at the baseline fit x0 is then
-// 1 + rho (1/h(x0) - 1): small where the fit sits on an end node (h = 31/35). Diagnostic only:
-// no decision of the loop reads it.
+// 1 + rho (1/h(x0) - 1): small where the fit sits on an end node (h = 31/35). That factor is the
+// equally weighted surface's; the loop's own weights each node by its own standard error, so for
+// the loop it is an estimate. Diagnostic only: no decision of the loop reads it.
 #pragma once
 
 #include "calibrate/fit.hpp"
@@ -31,7 +32,6 @@ struct SurfaceNoiseGroup {
 };
 
 struct SurfaceNoiseCheck {
-  int replicates = 0;         // model replicates per node
   int nodes = 0;              // nodes in the baseline surface's window
   std::string problem;        // why there is no estimate (empty when there is one)
   SurfaceNoiseGroup all;      // every usable fitted point
