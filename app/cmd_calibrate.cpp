@@ -26,6 +26,7 @@ struct CalibrateCommands::Options {
   int contenders = CalibrationDef{}.contenders;
   int model_replicates = 0;  // 0: the data file's [model] replicates
   double decisive_score_p = CalibrationDef{}.decisive_score_p;
+  bool held_out_route = CalibrationDef{}.held_out_route;
   // twin
   std::uint64_t seed = 1;
   std::vector<std::string> effects, set;
@@ -77,6 +78,7 @@ int cmd_calibrate(const CalibrateCommands::Options& o) {
   def.max_effects = o.max_effects;
   def.contenders = o.contenders;
   def.decisive_score_p = o.decisive_score_p;
+  def.held_out_route = o.held_out_route;
   // Under MPI every rank has read and checked the data file; ranks >= 1 only simulate.
   std::unique_ptr<MpiSession> mpi = o.mpi ? std::make_unique<MpiSession>() : nullptr;
   g_cancel.store(false);
@@ -158,6 +160,9 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
                           "Adjusted p below which the best candidate is tried even where the fitted chi2 is within "
                           "the noise (default 0: never; rule 1 of calibrate/decisions.hpp)")
       ->check(CLI::Range(0.0, 0.05));
+  o.calibrate->add_flag("--held-out-route", o.held_out_route,
+                        "Also look for an effect where the fitted points are within the noise but the held-out points "
+                        "are not (default off; rule 1 of calibrate/decisions.hpp)");
   o.calibrate->add_option("--model-replicates", o.model_replicates,
                           "Model runs per point and parameter value, in place of the data file's [model] replicates "
                           "(more: less model noise in every test, more runs)")

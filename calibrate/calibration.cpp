@@ -168,7 +168,7 @@ class Loop {
     for (int round_no = 0; round_no < def_.max_effects; ++round_no) {
       Round round = score_round(cands, state, surface);
       const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
-      if (!worth_trying(round, state, best)) break;
+      if (!worth_trying(round, state, best, held_out_p(state, surface))) break;
       if (!reference) reference = responses_.reference_with(base, state.params, surface.effects);
       Trial trial = contest(round, terms, *reference, surface, state);
       const Candidate chosen = *find(round, round.best);
@@ -206,15 +206,36 @@ class Loop {
     Keep verdict = Keep::bic_not_better;
   };
 
+  // The held-out points' chi^2 p at `state` for rule 1's held-out route: fresh seeds, the fitted
+  // parameters' uncertainty carried to them (the final verdict's own test, so at the state the
+  // loop stops in, the runs are the ones the verdict reads). 1 where the route is off or not needed.
+  double held_out_p(const ModelState& state, const Surface& surface) {
+    if (!def_.held_out_route || state.fitted.chi.p < def_.alpha) return 1.0;
+    const Prediction fresh =
+        ev_.evaluate({state.params}, data_.seed + def_.fresh_seed_offset, data_.model_replicates).front();
+    return held_out_fit_aware(data_, surface, state, fresh).p;
+  }
+
   // Whether the round looks for an effect (decisions.hpp); if not, its decision is recorded,
-  // prefixed by `context` (a pair's second round names the effect in place).
-  bool worth_trying(Round& round, const ModelState& state, const Candidate* best, const std::string& context = "") {
+  // prefixed by `context` (a pair's second round names the effect in place). `held_p`: the
+  // held-out points' chi^2 p (held_out_p; 1: not used).
+  bool worth_trying(Round& round, const ModelState& state, const Candidate* best, double held_p,
+                    const std::string& context = "") {
     const double p = state.fitted.chi.p;
-    switch (should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha, def_.decisive_score_p)) {
+    const Attribute a =
+        should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha, def_.decisive_score_p, held_p);
+    const std::string residual = p < def_.alpha ? fmt::format("the residual is not consistent with the noise (chi2 p = {:.3g})", p)
+                                                : fmt::format("the fitted points are within the noise (chi2 p = {:.3g}) but "
+                                                              "the held-out points are not (fresh seeds, chi2 p = {:.3g})",
+                                                              p, held_p);
+    switch (a) {
       case Attribute::yes: return true;
       case Attribute::decisive_score:
         say(fmt::format("{}the residual's chi2 is within the noise (p = {:.3g}) but {}'s score is decisive (adjusted p = "
                         "{:.3g} < {:.3g}): tried", context, p, best->effect, best->p_adjusted, def_.decisive_score_p));
+        return true;
+      case Attribute::held_out_residual:
+        say(fmt::format("{}{}: {} (adjusted p = {:.3g}) tried", context, residual, best->effect, best->p_adjusted));
         return true;
       case Attribute::consistent_with_noise:
         round.decision = best ? fmt::format("the residual is consistent with the noise (chi2 p = {:.3g}): nothing to "
@@ -223,9 +244,8 @@ class Loop {
         break;
       case Attribute::nothing_visible: round.decision = "no catalogue effect is visible in this design"; break;
       case Attribute::nothing_significant:
-        round.decision = fmt::format("no effect's score is significant (best {}: adjusted p = {:.3g}) although the "
-                                     "residual is not consistent with the noise (chi2 p = {:.3g})",
-                                     best->effect, best->p_adjusted, p);
+        round.decision = fmt::format("no effect's score is significant (best {}: adjusted p = {:.3g}) although {}",
+                                     best->effect, best->p_adjusted, residual);
         break;
     }
     round.decision = context + round.decision;
@@ -381,7 +401,7 @@ class Loop {
     Round round = score_round(rest, one.after, one.surface);
     const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
     const std::string context = fmt::format("with {} in place (a pair): ", first.effect);
-    if (!worth_trying(round, one.after, best, context)) return false;
+    if (!worth_trying(round, one.after, best, 1.0, context)) return false;  // a pair: the fitted points only
     const Candidate second = *best;
     const Reference ref = responses_.reference_with(base, one.fit.params, one.surface.effects);
     const Trial two = try_effect(second, terms, ref, one.surface, one.after, state);
@@ -560,6 +580,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.alpha = def.alpha;
   out.contenders = def.contenders;
   out.decisive_score_p = def.decisive_score_p;
+  out.held_out_route = def.held_out_route;
   out.runs_simulated = ev.runs_simulated();
   out.runs_reused = ev.runs_reused();
   out.run_seconds = ev.run_seconds();

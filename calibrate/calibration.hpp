@@ -53,9 +53,12 @@ struct CalibrationDef {
                                    // 1: the best score (blind passes 11-12: 28 of 36 identified with 1 and with 3)
   double decisive_score_p = 0;     // a best score with adjusted p below this is tried even where the fitted chi^2 is
                                    // within the noise (decisions.hpp, rule 1's option; 0: never)
+  bool held_out_route = false;     // a round also looks for an effect where the fitted points are within the noise but
+                                   // the held-out points are not (decisions.hpp, rule 1's second option)
   int grid_max = 9;                // grid nodes of a one-parameter baseline fit
   int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)
-  std::uint64_t fresh_seed_offset = 7919;  // run.seed offset of the fresh-seed re-score (reported, decides nothing)
+  std::uint64_t fresh_seed_offset = 7919;  // run.seed offset of the fresh-seed re-score (reported; its held-out points
+                                   // decide the final verdict and, with held_out_route, whether a round looks)
   std::uint64_t decision_seed_offset = 7907;  // run.seed offset of the held-out keep test (other seeds than the re-score)
   int keep_test_replicate_factor = 4;  // the keep test runs the held-out points with this many times the data
                                    // file's model replicates: its verdict must not hinge on the model's own noise
@@ -146,6 +149,7 @@ struct CalibrationResult {
   double alpha = 0.05;             // the level the loop's tests used (CalibrationDef::alpha)
   int contenders = 1;              // CalibrationDef::contenders it ran with
   double decisive_score_p = 0;     // CalibrationDef::decisive_score_p it ran with
+  bool held_out_route = false;     // CalibrationDef::held_out_route it ran with
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
   double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)
   double surface_noise_ratio = NAN;  // the baseline's true model variance over what the surface reports, and

@@ -8,12 +8,13 @@
 namespace gapflow {
 
 Attribute should_attribute(double residual_p, bool any_visible, double best_p_adjusted, double alpha,
-                           double decisive_score_p) {
-  if (residual_p >= alpha)
+                           double decisive_score_p, double held_out_p) {
+  const bool fitted_within = residual_p >= alpha, held_out_within = held_out_p >= alpha;
+  if (fitted_within && held_out_within)
     return any_visible && best_p_adjusted < decisive_score_p ? Attribute::decisive_score : Attribute::consistent_with_noise;
   if (!any_visible) return Attribute::nothing_visible;
   if (best_p_adjusted >= alpha) return Attribute::nothing_significant;
-  return Attribute::yes;
+  return fitted_within ? Attribute::held_out_residual : Attribute::yes;
 }
 
 bool decisive(const KeepEvidence& e, double decisive_bic) { return e.bic_before - e.bic_after >= decisive_bic; }

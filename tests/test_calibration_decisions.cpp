@@ -49,6 +49,23 @@ TEST(ShouldAttribute, ADecisiveScoreIsTriedWhereTheChiSquareIsWithinTheNoise) {
   EXPECT_EQ(should_attribute(0.0117, true, 5.6e-7, 0.05, 1e-4), Attribute::yes);
 }
 
+TEST(ShouldAttribute, TheHeldOutRouteLooksWhereOnlyTheHeldOutPointsAreBeyondTheNoise) {
+  // Blind pass 17's wallfriction-high: fitted chi^2 p 0.236, wall friction at adjusted p 0.0038,
+  // the held-out points beyond the noise (final verdict "unexplained residual").
+  EXPECT_EQ(should_attribute(0.236, true, 0.0038, 0.05), Attribute::consistent_with_noise);  // off
+  EXPECT_EQ(should_attribute(0.236, true, 0.0038, 0.05, 0, 0.01), Attribute::held_out_residual);
+  // The held-out points within the noise: nothing changes.
+  EXPECT_EQ(should_attribute(0.236, true, 0.0038, 0.05, 0, 0.05), Attribute::consistent_with_noise);
+  // The same condition on the candidate as ever: significant and visible.
+  EXPECT_EQ(should_attribute(0.236, true, 0.05, 0.05, 0, 0.01), Attribute::nothing_significant);
+  EXPECT_EQ(should_attribute(0.236, false, 0.0, 0.05, 0, 0.01), Attribute::nothing_visible);
+  // Where the fitted points are beyond the noise, the ordinary route decides.
+  EXPECT_EQ(should_attribute(0.0117, true, 0.0038, 0.05, 0, 0.01), Attribute::yes);
+  EXPECT_EQ(should_attribute(0.0117, true, 0.2, 0.05, 0, 0.01), Attribute::nothing_significant);
+  // A decisive score keeps its own route when the held-out points pass.
+  EXPECT_EQ(should_attribute(0.236, true, 1e-6, 0.05, 1e-4, 0.5), Attribute::decisive_score);
+}
+
 TEST(FinalVerdict, ConsistentWithNoiseNeedsTheHeldOutPointsWithinTheNoiseToo) {
   // Blind pass 7, rolling-high: fitted chi^2 p 0.157, held-out (fresh seeds, the fit's uncertainty
   // included) p 0.00648, no effect
