@@ -24,10 +24,12 @@
 //    beyond it, the fitted parameters have taken in something the model lacks, and the final
 //    verdict says "unexplained residual". With the option the round then looks for it, on the
 //    same condition as ever: the best visible candidate's adjusted p < alpha. Over blind
-//    passes 8-17 (read after them, so pass 18 tests it) that route would have fired on 4
-//    planted single effects, each the planted one at the score (pass 8 rolling-low, pass 12
-//    scatter-low, pass 15 wallfriction-low, pass 17 wallfriction-high), on 3 rolling twins
-//    with another candidate best, on 2 out-of-catalogue twins, and on no null twin. On a
+//    passes 8-17 (read after them, so pass 18 tests it) that route would have fired in 12
+//    rounds of 270 twins: in a first round on 4 planted single effects, each the planted one
+//    at the score (pass 8 rolling-low, pass 12 scatter-low, pass 15 wallfriction-low, pass 17
+//    wallfriction-high), on 3 rolling twins with another candidate best and on 2
+//    out-of-catalogue twins; in a second round, after an effect was added, on 3 twins (two of
+//    them single effects, where it could add a wrong second effect); on no null twin. On a
 //    null twin the extra route needs two tests to reject (the held-out chi^2 at alpha and
 //    the best score at alpha after Bonferroni).
 // 2. Whether to keep a fitted effect: BIC must fall, and the held-out points'
