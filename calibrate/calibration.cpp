@@ -224,10 +224,10 @@ class Loop {
     const double p = state.fitted.chi.p;
     const Attribute a =
         should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha, def_.decisive_score_p, held_p);
-    const std::string residual = p < def_.alpha ? fmt::format("the residual is not consistent with the noise (chi2 p = {:.3g})", p)
-                                                : fmt::format("the fitted points are within the noise (chi2 p = {:.3g}) but "
-                                                              "the held-out points are not (fresh seeds, chi2 p = {:.3g})",
-                                                              p, held_p);
+    const std::string residual =
+        p < def_.alpha ? fmt::format("the residual is not consistent with the noise (chi2 p = {:.3g})", p)
+                       : fmt::format("the held-out points are not consistent with the noise (fresh seeds, chi2 p = {:.3g}; "
+                                     "the fitted points' chi2 p = {:.3g})", held_p, p);
     switch (a) {
       case Attribute::yes: return true;
       case Attribute::decisive_score:
@@ -235,7 +235,9 @@ class Loop {
                         "{:.3g} < {:.3g}): tried", context, p, best->effect, best->p_adjusted, def_.decisive_score_p));
         return true;
       case Attribute::held_out_residual:
-        say(fmt::format("{}{}: {} (adjusted p = {:.3g}) tried", context, residual, best->effect, best->p_adjusted));
+        say(fmt::format("{}the fitted points are within the noise (chi2 p = {:.3g}) but the held-out points are not "
+                        "(fresh seeds, chi2 p = {:.3g}): {} (adjusted p = {:.3g}) tried",
+                        context, p, held_p, best->effect, best->p_adjusted));
         return true;
       case Attribute::consistent_with_noise:
         round.decision = best ? fmt::format("the residual is consistent with the noise (chi2 p = {:.3g}): nothing to "
