@@ -27,6 +27,7 @@ struct CalibrateCommands::Options {
   int model_replicates = 0;  // 0: the data file's [model] replicates
   double decisive_score_p = CalibrationDef{}.decisive_score_p;
   bool held_out_route = CalibrationDef{}.held_out_route;
+  bool independent_signatures = CalibrationDef{}.independent_signatures;
   // twin
   std::uint64_t seed = 1;
   std::vector<std::string> effects, set;
@@ -79,6 +80,7 @@ int cmd_calibrate(const CalibrateCommands::Options& o) {
   def.contenders = o.contenders;
   def.decisive_score_p = o.decisive_score_p;
   def.held_out_route = o.held_out_route;
+  def.independent_signatures = o.independent_signatures;
   // Under MPI every rank has read and checked the data file; ranks >= 1 only simulate.
   std::unique_ptr<MpiSession> mpi = o.mpi ? std::make_unique<MpiSession>() : nullptr;
   g_cancel.store(false);
@@ -163,6 +165,9 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
   o.calibrate->add_flag("--held-out-route", o.held_out_route,
                         "Also look for an effect where the fitted points are within the noise but the held-out points "
                         "are not (default off; rule 1 of calibrate/decisions.hpp)");
+  o.calibrate->add_flag("--independent-signatures", o.independent_signatures,
+                        "Measure the effects' signatures on seeds of their own, not the baseline nodes' (default off; "
+                        "calibrate/effect_responses.hpp)");
   o.calibrate->add_option("--model-replicates", o.model_replicates,
                           "Model runs per point and parameter value, in place of the data file's [model] replicates "
                           "(more: less model noise in every test, more runs)")

@@ -163,12 +163,14 @@ class Loop {
     base_ = &base;
     std::vector<EffectTerm> terms;
     const Reference baseline = EffectResponses::baseline_reference(base);
-    std::vector<Candidate> cands = responses_.signatures(baseline, terms);
+    std::vector<Candidate> cands = responses_.signatures(
+        def_.independent_signatures ? responses_.on_own_seeds(baseline, data_.seed + def_.signature_seed_offset) : baseline,
+        terms);
     std::optional<Reference> reference = baseline;  // where the next effect's response is measured
     for (int round_no = 0; round_no < def_.max_effects; ++round_no) {
       Round round = score_round(cands, state, surface);
       const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
-      if (!worth_trying(round, state, best, held_out_p(state, surface))) break;
+      if (!worth_trying(round, state, best, fresh_held_out_p(state, surface))) break;
       if (!reference) reference = responses_.reference_with(base, state.params, surface.effects);
       Trial trial = contest(round, terms, *reference, surface, state);
       const Candidate chosen = *find(round, round.best);
@@ -207,9 +209,11 @@ class Loop {
   };
 
   // The held-out points' chi^2 p at `state` for rule 1's held-out route: fresh seeds, the fitted
-  // parameters' uncertainty carried to them (the final verdict's own test, so at the state the
-  // loop stops in, the runs are the ones the verdict reads). 1 where the route is off or not needed.
-  double held_out_p(const ModelState& state, const Surface& surface) {
+  // parameters' uncertainty carried to them (the final verdict's own test: where the loop stops in
+  // this state, the verdict reads these runs again, so a route that fired and was rejected leaves
+  // the verdict "unexplained" on the same evidence). 1 where the route is off, not needed, or there
+  // are no held-out points.
+  double fresh_held_out_p(const ModelState& state, const Surface& surface) {
     if (!def_.held_out_route || state.fitted.chi.p < def_.alpha) return 1.0;
     const Prediction fresh =
         ev_.evaluate({state.params}, data_.seed + def_.fresh_seed_offset, data_.model_replicates).front();
@@ -217,17 +221,17 @@ class Loop {
   }
 
   // Whether the round looks for an effect (decisions.hpp); if not, its decision is recorded,
-  // prefixed by `context` (a pair's second round names the effect in place). `held_p`: the
-  // held-out points' chi^2 p (held_out_p; 1: not used).
-  bool worth_trying(Round& round, const ModelState& state, const Candidate* best, double held_p,
+  // prefixed by `context` (a pair's second round names the effect in place). `held_out_p`: the
+  // held-out points' chi^2 p at `state` (1: not used).
+  bool worth_trying(Round& round, const ModelState& state, const Candidate* best, double held_out_p,
                     const std::string& context = "") {
     const double p = state.fitted.chi.p;
     const Attribute a =
-        should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha, def_.decisive_score_p, held_p);
+        should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha, def_.decisive_score_p, held_out_p);
     const std::string residual =
         p < def_.alpha ? fmt::format("the residual is not consistent with the noise (chi2 p = {:.3g})", p)
                        : fmt::format("the held-out points are not consistent with the noise (fresh seeds, chi2 p = {:.3g}; "
-                                     "the fitted points' chi2 p = {:.3g})", held_p, p);
+                                     "the fitted points' chi2 p = {:.3g})", held_out_p, p);
     switch (a) {
       case Attribute::yes: return true;
       case Attribute::decisive_score:
@@ -237,7 +241,7 @@ class Loop {
       case Attribute::held_out_residual:
         say(fmt::format("{}the fitted points are within the noise (chi2 p = {:.3g}) but the held-out points are not "
                         "(fresh seeds, chi2 p = {:.3g}): {} (adjusted p = {:.3g}) tried",
-                        context, p, held_p, best->effect, best->p_adjusted));
+                        context, p, held_out_p, best->effect, best->p_adjusted));
         return true;
       case Attribute::consistent_with_noise:
         round.decision = best ? fmt::format("the residual is consistent with the noise (chi2 p = {:.3g}): nothing to "
@@ -384,7 +388,8 @@ class Loop {
   void judge(Trial& t, const Candidate& c, const ModelState& against) {
     // The held-out test by direct simulation, not on the surface: both parameter sets run
     // on seeds of their own (common to both, so that their difference is not the packing;
-    // not the final re-score's, which must not have decided anything).
+    // not the final re-score's: with the held-out route those decided that the round looks,
+    // and the keep test must not read the same noise again).
     // On the surface a held-out point's prediction carries the finite-difference noise of
     // the effect's measured response there, which can outweigh its data's error.
     const HeldOutCheck held = held_out_check(data_, def_, ev_, against.params, t.fit.params);
@@ -583,6 +588,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.contenders = def.contenders;
   out.decisive_score_p = def.decisive_score_p;
   out.held_out_route = def.held_out_route;
+  out.independent_signatures = def.independent_signatures;
   out.runs_simulated = ev.runs_simulated();
   out.runs_reused = ev.runs_reused();
   out.run_seconds = ev.run_seconds();

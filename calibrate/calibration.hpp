@@ -55,6 +55,9 @@ struct CalibrationDef {
                                    // within the noise (decisions.hpp, rule 1's option; 0: never)
   bool held_out_route = false;     // a round also looks for an effect where the fitted points are within the noise but
                                    // the held-out points are not (decisions.hpp, rule 1's second option)
+  bool independent_signatures = false;  // the signatures' moved and unmoved runs on seeds of their own, not the
+                                   // baseline nodes' (effect_responses.hpp: why the score then has no bias)
+  std::uint64_t signature_seed_offset = 7933;  // run.seed offset of those runs
   int grid_max = 9;                // grid nodes of a one-parameter baseline fit
   int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)
   std::uint64_t fresh_seed_offset = 7919;  // run.seed offset of the fresh-seed re-score (reported; its held-out points
@@ -150,6 +153,7 @@ struct CalibrationResult {
   int contenders = 1;              // CalibrationDef::contenders it ran with
   double decisive_score_p = 0;     // CalibrationDef::decisive_score_p it ran with
   bool held_out_route = false;     // CalibrationDef::held_out_route it ran with
+  bool independent_signatures = false;  // CalibrationDef::independent_signatures it ran with
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
   double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)
   double surface_noise_ratio = NAN;  // the baseline's true model variance over what the surface reports, and

@@ -92,6 +92,7 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
   o << fmt::format("  \"contenders\": {},\n", r.contenders);
   o << fmt::format("  \"decisive_score_p\": {},\n", r.decisive_score_p);
   o << fmt::format("  \"held_out_route\": {},\n", r.held_out_route ? "true" : "false");
+  o << fmt::format("  \"independent_signatures\": {},\n", r.independent_signatures ? "true" : "false");
   o << fmt::format("  \"verdict\": {},\n  \"poor_fit\": {},\n  \"held_out_beyond_noise\": {},\n", json_string(r.verdict),
                    r.poor_fit ? "true" : "false", r.held_out_beyond_noise ? "true" : "false");
   o << fmt::format("  \"held_out_fresh_fit_aware\": {{\"chi2\": {}, \"dof\": {}, \"p\": {}}},\n",

@@ -15,14 +15,18 @@
 //    spreads its power over every direction of the residual; one strong direction can hide
 //    in it (blind pass 12's scatter-low: size scatter's adjusted p 5.6e-7, the fitted chi^2
 //    p 0.11, nothing tried). On a null twin the extra route rejects at a rate below the
-//    threshold (Bonferroni-adjusted). Over passes 8-12 the nulls' smallest adjusted p was
+//    threshold (Bonferroni-adjusted) if the scores are calibrated; by default they lean
+//    toward the steps (effect_responses.hpp, "Shared noise"; the nulls of passes 8-17 reached
+//    adjusted p 1.7e-5). Over passes 8-12 the nulls' smallest adjusted p was
 //    4.7e-4 and the out-of-catalogue twins' 5.6e-4; the threshold 1e-4 was chosen after
 //    seeing them, so only a fresh pass (13 onward) tests it.
 //    Option (CalibrationDef::held_out_route, off by default): the held-out points' residual
 //    counts as well. Where the fitted points are within the noise but the held-out points
 //    (fresh seeds, the fitted parameters' uncertainty carried to them: rule 3's own test) are
 //    beyond it, the fitted parameters have taken in something the model lacks, and the final
-//    verdict says "unexplained residual". With the option the round then looks for it, on the
+//    verdict says "unexplained residual: the held-out points are beyond the noise" (after an
+//    effect: "effect found; the held-out points are still beyond the noise"). With the option
+//    the round then looks for it, on the
 //    same condition as ever: the best visible candidate's adjusted p < alpha. Over blind
 //    passes 8-17 (read after them, so pass 18 tests it) that route would have fired in 12
 //    rounds of 270 twins: in a first round on 4 planted single effects, each the planted one
@@ -71,9 +75,10 @@ enum class Attribute {
   yes,                    // look for the effect: the residual is beyond the noise and a candidate is significant
   decisive_score,         // look for the effect: the residual's chi^2 is within the noise, the best score decisive
   held_out_residual,      // look for the effect: the fitted points are within the noise, the held-out points are not
-  consistent_with_noise,  // the fitted residual is within the noise: nothing to explain
+  consistent_with_noise,  // the fitted residual (and, with the held-out route, the held-out one) within the noise
   nothing_visible,        // no catalogue effect moves this design beyond its noise
-  nothing_significant,    // the residual is beyond the noise but no candidate's score is significant
+  nothing_significant,    // the residual (fitted, or with the route held-out) is beyond the noise but no
+                          // candidate's score is significant
 };
 
 // `residual_p`: P(chi^2 > observed) of the fitted points; `best_p_adjusted`: the best visible

@@ -87,6 +87,20 @@ Reference EffectResponses::reference_with(const BaselineFit& base, const Paramet
   return r;
 }
 
+std::vector<Prediction> EffectResponses::evaluate_at(const Reference& at, const std::vector<ParameterSet>& sets) {
+  return at.seed ? ev_.evaluate(sets, *at.seed, data_.model_replicates) : ev_.evaluate(sets);
+}
+
+Reference EffectResponses::on_own_seeds(const Reference& at, std::uint64_t seed) {
+  Reference r = at;
+  r.seed = seed;
+  say_(fmt::format("signatures on seeds of their own (base seed {}): the {} reference node(s) run again ({} runs)", seed,
+                   r.nodes.size(),
+                   r.nodes.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
+  r.predictions = evaluate_at(r, r.nodes);
+  return r;
+}
+
 std::vector<Candidate> EffectResponses::signatures(const Reference& at, std::vector<EffectTerm>& terms) {
   std::vector<Candidate> cands;
   for (const EffectDef& e : effect_catalogue()) {
@@ -171,7 +185,7 @@ void EffectResponses::measure_signatures(std::vector<Candidate>& cands, const st
     for (const ParameterSet& n : at.nodes) sets.push_back(n.with(cands[c].key, cands[c].neutral + cands[c].step));
   say_(fmt::format("signatures: {} effect(s) {} at {} node(s) ({} runs)", which.size(), why, at.nodes.size(),
                    sets.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
-  const std::vector<Prediction> moved = ev_.evaluate(sets);
+  const std::vector<Prediction> moved = evaluate_at(at, sets);
   for (std::size_t k = 0; k < which.size(); ++k) {
     Candidate& cand = cands[which[k]];
     const EffectDef& e = *find_effect(cand.effect);
@@ -246,7 +260,7 @@ void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std:
   say_(fmt::format("{}: response measured at {} {}size(s) ({}) at {} node(s)", c.effect, offsets.size(),
                    term.offsets.size() > 1 ? "more " : "",
                    fmt::join(offsets, ", "), at.nodes.size()));
-  const std::vector<Prediction> moved = ev_.evaluate(sets);
+  const std::vector<Prediction> moved = evaluate_at(at, sets);
   for (std::size_t k = 0; k < offsets.size(); ++k) {
     std::vector<double> shift, se;
     for (std::size_t i = 0; i < data_.points.size(); ++i) {

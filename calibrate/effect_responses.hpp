@@ -27,6 +27,17 @@
 // would cost a second signature batch, ~2000 runs).
 // A later round's term has the step and the refinement sizes, not the range's-end
 // look a weak signature got in the first round.
+//
+// Shared noise (CalibrationDef::independent_signatures, off by default). The score test
+// (attribution.hpp) projects the residual r = data - surface on a signature g, the moved runs
+// less the unmoved runs at the nearest nodes. On the baseline's seeds, those unmoved runs are
+// the very runs the surface was fitted through: r carries minus their noise, and so does g,
+// where the moved runs do not repeat it (a simulator's trajectories part within a few
+// collisions, so common random numbers cancel little of it). Then E[g.r] > 0 on a correct
+// model: every score leans toward its step, most for the weak signatures, and the test rejects
+// too often. With the option the signatures' moved and unmoved runs are made on seeds of their
+// own; the refinement sizes of an effect about to be fitted stay paired with the nodes' runs
+// on the baseline's seeds (each size is paired within itself, so the term may mix the two).
 #pragma once
 
 #include "calibrate/calibration.hpp"
@@ -45,6 +56,7 @@ struct Reference {
   std::vector<ParameterSet> nodes;
   std::vector<Prediction> predictions;  // one per node: the partners of the moved runs
   ParameterSet anchor;                  // the fitted point the nodes were chosen around
+  std::optional<std::uint64_t> seed;    // the base seed of those runs and of the moved ones (none: the data file's)
 };
 
 // The baseline's nodes with the effects' keys set to their values in `effects_at` (an effect
@@ -64,7 +76,10 @@ class EffectResponses {
       : data_(data), def_(def), ev_(ev), say_(std::move(say)) {}
 
   // The baseline's nodes as a reference (their runs are made).
-  static Reference baseline_reference(const BaselineFit& base) { return {base.nodes, base.node_predictions, base.params}; }
+  static Reference baseline_reference(const BaselineFit& base) { return {base.nodes, base.node_predictions, base.params, {}}; }
+  // The same nodes run again on base seed `seed` (one batch): moved runs paired with these share
+  // no noise with the baseline's surface (CalibrationDef::independent_signatures).
+  Reference on_own_seeds(const Reference& at, std::uint64_t seed);
   // The (up to) three baseline grid nodes nearest `fitted`'s free parameters, with the added effects at
   // their values in `fitted`: one batch of runs (none new for baseline nodes without effects).
   Reference reference_with(const BaselineFit& base, const ParameterSet& fitted, const std::vector<EffectTerm>& effects);
@@ -86,6 +101,8 @@ class EffectResponses {
   void measure_signatures(std::vector<Candidate>& cands, const std::vector<std::size_t>& which, const Reference& at,
                           std::vector<EffectTerm>& terms, const std::string& why);
   void add_sizes(EffectTerm& term, const Candidate& c, const std::vector<double>& offsets, const Reference& at);
+  // `sets` run on the reference's seeds.
+  std::vector<Prediction> evaluate_at(const Reference& at, const std::vector<ParameterSet>& sets);
 
   const DataFile& data_;
   const CalibrationDef& def_;

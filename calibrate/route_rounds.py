@@ -6,11 +6,15 @@
 The route (`gapflow calibrate --held-out-route`, calibrate/decisions.hpp rule 1) writes one log line
 when it fires: "the fitted points are within the noise (chi2 p = P) but the held-out points are not
 (fresh seeds, chi2 p = Q): NAME (adjusted p = R) tried". The round's outcome is the next log line
-that starts "added NAME", "candidate NAME ... rejected" or, for two contenders, names the tried one.
-Each calibration's log is in its report.md. Prints, per firing: the case, its planted effects (from
-the pass's truth/CASE.json), the candidate tried, the outcome, whether what was added is the planted
-effect (or a group holding it), and the final verdict; then counts per pass. Exit 2 on a folder
-without calibrations.
+that starts "added NAME" or "candidate NAME ... rejected" (with --contenders > 1 the candidate tried
+may differ from the one the firing line names: the outcome line names it). A rejected first effect
+later kept as a pair is read from summary.json's rounds ("kept as a pair with"), since the log does
+not say it. The round's number is 1 + the effects added before the firing. Each calibration's log is
+in its report.md. Prints, per firing: the case, its planted effects (from the pass's
+truth/CASE.json), the round, the candidate, the outcome, whether what was added is the planted effect
+(or a group holding it), and the final verdict; then counts per pass. Folders named replay-* (replays
+inside a pass folder) are not the pass's calibrations and are skipped. Exit 2 on a folder without
+calibrations.
 """
 import glob
 import json
@@ -34,16 +38,31 @@ def planted_effects(pass_dir, case):
 
 
 def firings(report_text):
-    """(fitted p, held-out p, candidate, adjusted p, outcome line) for each firing, in log order."""
+    """(round, fitted p, held-out p, candidate, adjusted p, outcome line) for each firing, in log order."""
     lines = report_text.splitlines()
     out = []
     for i, line in enumerate(lines):
         m = FIRED.search(line)
         if not m:
             continue
+        round_no = 1 + sum(1 for l in lines[:i] if l.startswith("added "))
         outcome = next((l for l in lines[i + 1:] if OUTCOME.match(l)), "no outcome line")
-        out.append((float(m.group(1)), float(m.group(2)), m.group(3), float(m.group(4)), outcome))
+        out.append((round_no, float(m.group(1)), float(m.group(2)), m.group(3), float(m.group(4)), outcome))
     return out
+
+
+def added_name(outcome, summary):
+    """The effect the round added: from its log line, or, for a rejected first effect kept as a pair, from
+    summary.json's round decisions."""
+    m = OUTCOME.match(outcome)
+    if not m:
+        return None
+    if m.group(2):
+        return m.group(2)
+    rejected = m.group(3)
+    paired = any(r["decision"].startswith(f"candidate {rejected} ") and "kept as a pair with" in r["decision"]
+                 for r in summary["rounds"])
+    return rejected if paired else None
 
 
 def main():
@@ -51,7 +70,8 @@ def main():
         print("usage: route_rounds.py PASS_DIR [PASS_DIR...]", file=sys.stderr)
         sys.exit(2)
     for pass_dir in sys.argv[1:]:
-        summaries = sorted(glob.glob(os.path.join(pass_dir, "*", "summary.json")))
+        summaries = sorted(s for s in glob.glob(os.path.join(pass_dir, "*", "summary.json"))
+                           if not os.path.basename(os.path.dirname(s)).startswith("replay-"))
         if not summaries:
             print(f"error: no calibrations in {pass_dir}", file=sys.stderr)
             sys.exit(2)
@@ -67,15 +87,14 @@ def main():
             with open(s, encoding="utf-8") as f:
                 summary = json.load(f)
             planted = planted_effects(pass_dir, case)
-            for fitted_p, held_p, candidate, p_adj, outcome in rounds:
-                added = OUTCOME.match(outcome)
-                added_name = added.group(2) if added else None
-                group = next((e.get("group", []) for e in summary["effects"] if e["effect"] == added_name), [])
-                hit = "" if added_name is None or planted is None else \
-                    ("planted" if added_name in planted or any(p in group for p in planted) else "not planted")
+            for round_no, fitted_p, held_p, candidate, p_adj, outcome in rounds:
+                added = added_name(outcome, summary)
+                group = next((e.get("group", []) for e in summary["effects"] if e["effect"] == added), [])
+                hit = "" if added is None or planted is None else \
+                    ("planted" if added in planted or any(p in group for p in planted) else "not planted")
                 print(f"{pass_dir} {case} (planted: {', '.join(planted) if planted else 'none' if planted == [] else '?'}): "
-                      f"fitted p {fitted_p:g}, held-out p {held_p:g}, {candidate} adjusted p {p_adj:g}; "
-                      f"{'added ' + added_name if added_name else 'not added'} {('(' + hit + ')') if hit else ''}; "
+                      f"round {round_no}: fitted p {fitted_p:g}, held-out p {held_p:g}, {candidate} adjusted p {p_adj:g}; "
+                      f"{'added ' + added if added else 'not added'}{(' (' + hit + ')') if hit else ''}; "
                       f"verdict: {summary['verdict']}")
         print(f"{pass_dir}: the route fired in {fired_twins} of {len(summaries)} calibrations")
 

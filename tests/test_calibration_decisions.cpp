@@ -62,8 +62,10 @@ TEST(ShouldAttribute, TheHeldOutRouteLooksWhereOnlyTheHeldOutPointsAreBeyondTheN
   // Where the fitted points are beyond the noise, the ordinary route decides.
   EXPECT_EQ(should_attribute(0.0117, true, 0.0038, 0.05, 0, 0.01), Attribute::yes);
   EXPECT_EQ(should_attribute(0.0117, true, 0.2, 0.05, 0, 0.01), Attribute::nothing_significant);
-  // A decisive score keeps its own route when the held-out points pass.
+  // A decisive score keeps its own route when the held-out points pass; when they do not, the
+  // held-out route is the one named.
   EXPECT_EQ(should_attribute(0.236, true, 1e-6, 0.05, 1e-4, 0.5), Attribute::decisive_score);
+  EXPECT_EQ(should_attribute(0.236, true, 1e-6, 0.05, 1e-4, 0.01), Attribute::held_out_residual);
 }
 
 TEST(FinalVerdict, ConsistentWithNoiseNeedsTheHeldOutPointsWithinTheNoiseToo) {

@@ -146,6 +146,7 @@ struct SyntheticCase {
   std::uint64_t model_seed = 1;
   bool shallow_held_out = false;  // write_design's
   bool held_out_route = false;    // CalibrationDef's
+  bool independent_signatures = false;  // CalibrationDef's
 };
 
 // A twin of the design with `effects` planted (and the case's friction and seeds), calibrated blind.
@@ -170,6 +171,7 @@ SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::stri
   CalibrationDef def;
   def.contenders = contenders;
   def.held_out_route = c.held_out_route;
+  def.independent_signatures = c.independent_signatures;
   SyntheticRun run{calibrate(data, def, ev), ""};
   for (const std::string& line : run.result.log) run.log += line + "\n";
   return run;
@@ -265,11 +267,13 @@ TEST(CalibrationSynthetic, TheHeldOutRouteTracesAResidualOnlyTheHeldOutPointsSho
   EXPECT_EQ(on.result.verdict, "effect found");
 }
 
-// The route on null twins whose held-out points are beyond the noise (of twin seeds 1-8 of this
-// design, seeds 5 and 6; the closed-form model's noise is mostly common to every parameter value,
-// which the surface understates about 2x: calibrate/surface_noise.hpp): the round looks, no
-// candidate is significant, nothing is added.
-TEST(CalibrationSynthetic, TheHeldOutRouteAddsNothingToANullTwin) {
+// The route keeps rule 1's condition on the candidate. On null twins whose fitted points pass and
+// whose held-out points do not (of twin seeds 1-8 of this design, seeds 5 and 6; the closed-form
+// model's noise is mostly common to every parameter value, which the surface understates about
+// 2x: calibrate/surface_noise.hpp), the route considers the round, no candidate's score is
+// significant, and nothing is tried or added. (A null on which a candidate is significant too,
+// where the keep test would have to reject, was not found among these seeds.)
+TEST(CalibrationSynthetic, TheHeldOutRouteTriesNothingOnANullTwinWithoutASignificantCandidate) {
   for (std::uint64_t seed : {5u, 6u}) {
     TempDir dir("gapflow_calibration_synthetic_route_null");
     const SyntheticRun run = calibrate_synthetic(
@@ -277,6 +281,7 @@ TEST(CalibrationSynthetic, TheHeldOutRouteAddsNothingToANullTwin) {
     EXPECT_GE(run.result.before.fitted.chi.p, 0.05) << "the premise: the fitted points within the noise";
     EXPECT_NE(run.log.find("the held-out points are not consistent with the noise"), std::string::npos)
         << "the premise: the route considered this twin\n" << run.log;
+    EXPECT_EQ(run.log.find(") tried"), std::string::npos) << run.log;
     EXPECT_TRUE(run.result.effects.empty()) << run.log;
   }
 }
@@ -335,6 +340,89 @@ TEST(CalibrationSynthetic, DISABLED_SizeBiasAgainstModelNoise) {
     for (const AddedEffect& e : r.effects) sizes += fmt::format("{} {:.3f} [{:.3f}, {:.3f}] ", e.effect, e.value, e.lo95, e.hi95);
     std::cout << fmt::format("seed {}: {}friction {:.3f}; chi2/nu after {:.2f}\n", seed, sizes, friction(r.after),
                              r.after.fitted.chi.per_dof());
+  }
+}
+
+// The first round's scores on null twins lean toward each effect's step when the signatures are
+// measured against the baseline nodes' own runs: the residual and the signature then share those
+// runs' noise (effect_responses.hpp, "Shared noise"). On seeds of their own they do not. The noise
+// here is mostly each parameter value's own, as the simulator's (DISABLED_NullScores below: over 20
+// null twins, z toward the step +1.08 on the baseline's seeds, estimates toward it 79 of 93, best
+// adjusted p < 0.05 in 5; on their own seeds +0.05, 39 of 86, 1).
+double mean_z_toward_step(bool independent_signatures, int& scored) {
+  const NoiseScope noise({0.005, 0.03});
+  double sum = 0;
+  scored = 0;
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    TempDir dir("gapflow_calibration_synthetic_null_lean");
+    const SyntheticCase c{.twin_seed = seed, .model_seed = 100 + seed, .independent_signatures = independent_signatures};
+    const CalibrationResult r = calibrate_synthetic(dir, {}, 1, c).result;
+    if (r.rounds.empty()) continue;
+    for (const Candidate& k : r.rounds.front().candidates) {
+      if (!k.visible) continue;
+      const double z = k.score.estimate * k.score.projected_norm;  // estimate / se
+      sum += k.step > 0 ? z : -z;
+      ++scored;
+    }
+  }
+  return scored ? sum / scored : 0.0;
+}
+
+TEST(CalibrationSynthetic, SignaturesOnSeedsOfTheirOwnRemoveTheScoresLeanOnNullTwins) {
+  int n_shared = 0, n_own = 0;
+  const double shared = mean_z_toward_step(false, n_shared);
+  const double own = mean_z_toward_step(true, n_own);
+  ASSERT_GE(n_shared, 10);
+  ASSERT_GE(n_own, 10);
+  EXPECT_GT(shared, 0.6) << "the premise: on the baseline's seeds the scores lean toward the step";
+  EXPECT_LT(std::abs(own), 0.4) << "mean z over " << n_own << " scores";
+  std::cout << fmt::format("mean z toward the step: baseline seeds {:.3f} ({} scores), own seeds {:.3f} ({})\n", shared,
+                           n_shared, own, n_own);
+}
+
+// Exploration, not run by default (prints; asserts nothing): the first round's scores on null twins,
+// with the signatures on the baseline's seeds and on seeds of their own (effect_responses.hpp,
+// "Shared noise"). Knobs as SizeBiasAgainstModelNoise's: GAPFLOW_COMMON_NOISE, GAPFLOW_OWN_NOISE
+// (default 0.005, 0.03: mostly each parameter value's own, as the simulator's), GAPFLOW_MODEL_REPS
+// (default 4), GAPFLOW_SEEDS (default 20).
+//   GAPFLOW_SEEDS=20 build/tests/gapflow_tests --gtest_also_run_disabled_tests --gtest_filter='*NullScores*'
+TEST(CalibrationSynthetic, DISABLED_NullScores) {
+  const auto knob = [](const char* name, double fallback) {
+    const char* v = std::getenv(name);
+    return v ? std::stod(v) : fallback;
+  };
+  const NoiseScope noise({knob("GAPFLOW_COMMON_NOISE", 0.005), knob("GAPFLOW_OWN_NOISE", 0.03)});
+  const int reps = static_cast<int>(knob("GAPFLOW_MODEL_REPS", 4));
+  const auto seeds = static_cast<std::uint64_t>(knob("GAPFLOW_SEEDS", 20));
+  for (bool own : {false, true}) {
+    int below_05 = 0, below_01 = 0, toward = 0, scored = 0;
+    double sum_z = 0;
+    for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
+      TempDir dir("gapflow_calibration_synthetic_null_scores");
+      const SyntheticCase c{.twin_seed = seed, .model_replicates = reps, .model_seed = 100 + seed,
+                            .independent_signatures = own};
+      const CalibrationResult r = calibrate_synthetic(dir, {}, 1, c).result;
+      if (r.rounds.empty()) continue;
+      double best = 1;
+      std::string line;
+      for (const Candidate& k : r.rounds.front().candidates) {
+        if (!k.visible) continue;
+        best = std::min(best, k.p_adjusted);
+        const bool lean = k.score.estimate * k.step > 0;
+        toward += lean;
+        ++scored;
+        const double z = k.score.projected_norm > 0 ? k.score.estimate * k.score.projected_norm : 0;
+        sum_z += k.step > 0 ? z : -z;
+        line += fmt::format(" {} {:+.3g} (p adj {:.3g})", k.effect, k.score.estimate / k.step, k.p_adjusted);
+      }
+      below_05 += best < 0.05, below_01 += best < 0.01;
+      std::cout << fmt::format("{} seed {}: chi2 p {:.3g};{}\n", own ? "own seeds" : "baseline seeds", seed,
+                               r.before.fitted.chi.p, line);
+    }
+    std::cout << fmt::format("{}: best adjusted p < 0.05 in {} of {}, < 0.01 in {}; estimates toward the step {} of {}; "
+                             "mean z toward the step {:.3f}\n",
+                             own ? "OWN SEEDS" : "BASELINE SEEDS", below_05, seeds, below_01, toward, scored,
+                             scored ? sum_z / scored : 0.0);
   }
 }
 
