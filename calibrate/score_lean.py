@@ -2,6 +2,7 @@
 """Whether the first round's scores lean toward the effects' steps on the null twins of blind passes.
 
     /usr/bin/python3 calibrate/score_lean.py results/calibration-blind-pass{8,9,10,11,12,13,14,15,16,17}
+    /usr/bin/python3 calibrate/score_lean.py --cases "null-1 null-2" PASS_DIR   # those cases only
 
 On a null twin (no effect planted: folders null-*) the model is right, so each visible candidate's
 linearised size (summary.json rounds[0].candidates[].estimate, in the effect's units) points toward its
@@ -11,7 +12,7 @@ in at most a share x of the nulls. A score that shares noise with the residual l
 passes given: per candidate, how many of its sizes point toward the step; in all; and how many nulls
 have their best adjusted p below 0.001, 0.01, 0.05, 0.1 and 0.2. With --all, every twin is read, not
 only the nulls (planted effects lean toward their own steps by design: a check of the script, not of
-the loop). Exit 2 on a folder without null calibrations.
+the loop). With --cases, those cases only. Exit 2 on a folder without such calibrations.
 """
 import collections
 import glob
@@ -29,16 +30,26 @@ def first_round_candidates(summary_path):
 
 
 def main():
-    args = [a for a in sys.argv[1:] if a != "--all"]
-    pattern = "*" if "--all" in sys.argv[1:] else "null-*"
+    argv = sys.argv[1:]
+    only = None
+    if "--cases" in argv:
+        i = argv.index("--cases")
+        if i + 1 >= len(argv):
+            print("error: --cases needs a list of case names", file=sys.stderr)
+            sys.exit(2)
+        only = set(argv[i + 1].split())
+        argv = argv[:i] + argv[i + 2:]
+    args = [a for a in argv if a != "--all"]
+    pattern = "*" if "--all" in argv or only else "null-*"
     if not args:
-        print("usage: score_lean.py [--all] PASS_DIR [PASS_DIR...]", file=sys.stderr)
+        print("usage: score_lean.py [--all | --cases \"CASE...\"] PASS_DIR [PASS_DIR...]", file=sys.stderr)
         sys.exit(2)
     toward, scored = collections.Counter(), collections.Counter()
     best_p = []
     for pass_dir in args:
         summaries = sorted(s for s in glob.glob(os.path.join(pass_dir, pattern, "summary.json"))
-                           if not os.path.basename(os.path.dirname(s)).startswith("replay-"))
+                           if not os.path.basename(os.path.dirname(s)).startswith("replay-")
+                           and (only is None or os.path.basename(os.path.dirname(s)) in only))
         if not summaries:
             print(f"error: no {pattern} calibrations in {pass_dir}", file=sys.stderr)
             sys.exit(2)
@@ -50,7 +61,8 @@ def main():
                 scored[c["effect"]] += 1
                 toward[c["effect"]] += (c["estimate"] or 0) * c["step"] > 0
             best_p.append(min((c["p_adjusted"] for c in cands), default=1.0))
-    print(f"{len(best_p)} twins ({pattern}) in {len(args)} pass(es); first round's visible candidates:")
+    which = " ".join(sorted(only)) if only else pattern
+    print(f"{len(best_p)} twins ({which}) in {len(args)} folder(s); first round's visible candidates:")
     for effect in sorted(scored):
         print(f"  {effect}: {toward[effect]} of {scored[effect]} sizes toward the step")
     print(f"  all: {sum(toward.values())} of {sum(scored.values())} toward the step")
