@@ -20,7 +20,9 @@
 //    adjusted p 1.7e-5). Over passes 8-12 the nulls' smallest adjusted p was
 //    4.7e-4 and the out-of-catalogue twins' 5.6e-4; the threshold 1e-4 was chosen after
 //    seeing them, so only a fresh pass (13 onward) tests it.
-//    Option (CalibrationDef::held_out_route, off by default): the held-out points' residual
+//    Option (CalibrationDef::held_out_route, off by default; blind pass 18 tested it: one
+//    firing, on rolling-low, added linear drag for the planted rolling resistance, so it
+//    stays off): the held-out points' residual
 //    counts as well. Where the fitted points are within the noise but the held-out points
 //    (fresh seeds, the fitted parameters' uncertainty carried to them: rule 3's own test) are
 //    beyond it, the fitted parameters have taken in something the model lacks, and the final
@@ -28,7 +30,7 @@
 //    effect: "effect found; the held-out points are still beyond the noise"). With the option
 //    the round then looks for it, on the
 //    same condition as ever: the best visible candidate's adjusted p < alpha. Over blind
-//    passes 8-17 (read after them, so pass 18 tests it) that route would have fired in 12
+//    passes 8-17 (read after them) that route would have fired in 12
 //    rounds of 270 twins: in a first round on 4 planted single effects, each the planted one
 //    at the score (pass 8 rolling-low, pass 12 scatter-low, pass 15 wallfriction-low, pass 17
 //    wallfriction-high), on 3 rolling twins with another candidate best and on 2
