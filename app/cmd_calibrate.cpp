@@ -32,6 +32,8 @@ struct CalibrateCommands::Options {
   std::uint64_t seed = 1;
   std::vector<std::string> effects, set;
   int replicates = 10;
+  std::uint64_t model_seed = 0;
+  CLI::Option* model_seed_given = nullptr;  // --model-seed (else the design's [model] seed)
   std::string name;
 };
 
@@ -125,6 +127,7 @@ int cmd_twin(const CalibrateCommands::Options& o) {
   def.effects = o.effects;
   def.set = o.set;
   def.replicates = o.replicates;
+  if (o.model_seed_given->count() > 0) def.model_seed = o.model_seed;
   (void)draw_twin(design, def);  // bad effect names and sizes are input errors, before anything runs
   const std::filesystem::path db = o.db.empty() ? std::filesystem::path(o.out).parent_path() / "twin_runs.sqlite"
                                                 : std::filesystem::path(o.db);
@@ -187,6 +190,9 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
   o.twin->add_option("--effect", o.effects, "Catalogue effect to plant: NAME, NAME:low, NAME:high or NAME=VALUE (repeatable)");
   o.twin->add_option("--set", o.set, "Plant key=value as it is (e.g. an effect outside the catalogue; repeatable)");
   o.twin->add_option("--replicates", o.replicates, "Runs per point behind each value")->check(CLI::Range(2, 1000));
+  o.model_seed_given = o.twin->add_option("--model-seed", o.model_seed,
+                                          "The [model] seed written into the twin for its calibrations (default: the "
+                                          "design's; a blind study with one per twin samples the model's noise)");
   o.twin->add_option("--name", o.name, "[data] name of the twin (default: the file's stem)");
   o.twin->add_option("--jobs", o.jobs, "Worker threads")->check(CLI::Range(1, 1024));
   o.twin->add_option("--db", o.db, "Runs store (default: twin_runs.sqlite beside --out)");

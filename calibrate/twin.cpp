@@ -46,7 +46,7 @@ void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, con
                                                               std::filesystem::absolute(data_out).parent_path());
   o << fmt::format("[model]\nscenario = {}\nset = [", toml_quote(rel.generic_string()));
   for (std::size_t i = 0; i < d.set.size(); ++i) o << (i ? ", " : "") << toml_quote(d.set[i]);
-  o << fmt::format("]\nreplicates = {}\nseed = {}\n\n", d.model_replicates, d.seed);
+  o << fmt::format("]\nreplicates = {}\nseed = {}\n\n", d.model_replicates, def.model_seed.value_or(d.seed));
   o << fmt::format("[observable]\nkind = \"{}\"\nscale = \"{}\"\nuncertainty = \"se\"\nfloor_relative = {}\n\n",
                    to_string(d.observable), d.scale == FitScale::log ? "log" : "linear", number_text(d.floor_relative));
   for (const DesignColumn& c : d.design)

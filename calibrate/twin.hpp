@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,10 @@ struct TwinDef {
   std::vector<std::string> set;      // overrides planted as they are (e.g. an effect outside the catalogue)
   int replicates = 10;               // runs per point behind each value (its se from their spread)
   bool draw_free = true;             // the free parameters' true values drawn inside their ranges
+  // The [model] seed the twin's data file gives the calibrations of it (none: the design's). A blind
+  // study whose twins all carry the design's seed calibrates every twin against one draw of the
+  // model's noise (README, Calibration: what the blind study showed); a seed per twin samples it.
+  std::optional<std::uint64_t> model_seed;
 };
 
 struct PlantedValue {

@@ -242,6 +242,27 @@ TEST(CalibrationSynthetic, WhenTwoCandidatesAreSignificantBothAreFittedAndThePla
   EXPECT_TRUE(single.result.rounds.front().fits.empty());
 }
 
+// A twin's data file gives its calibrations the design's model seed unless told another: a blind
+// study with a seed per twin calibrates each against its own draw of the model's noise.
+TEST(CalibrationSynthetic, ATwinCarriesTheModelSeedItIsGiven) {
+  TempDir dir("gapflow_calibration_synthetic_twin_seed");
+  write_design(dir / "design.toml", 4, 1);
+  const DataFile design = load_data_file(dir / "design.toml");
+  EvaluatorOptions eo;
+  eo.runner = run_synthetic;
+  Store store(dir / "twin.sqlite");
+  Evaluator ev(design, store, eo);
+  for (const std::optional<std::uint64_t> seed : {std::optional<std::uint64_t>{}, std::optional<std::uint64_t>{15101}}) {
+    TwinDef twin;
+    twin.name = "seeded";
+    twin.seed = 3;
+    twin.model_seed = seed;
+    const std::string stem = seed ? "with_seed" : "without_seed";
+    (void)make_twin(design, twin, ev, dir / (stem + ".toml"), dir / (stem + ".json"));
+    EXPECT_EQ(load_data_file(dir / (stem + ".toml")).seed, seed.value_or(design.seed)) << stem;
+  }
+}
+
 // Rule 1's held-out route (decisions.hpp). A rolling resistance of 0.008 acts as 1/sin(incline):
 // over the fitted boards (5-12 deg) the friction takes most of it in and the fitted points stay
 // within the noise (chi2 p 0.069 on this twin), but the held-out board at 3 deg, beyond the fitted
