@@ -226,13 +226,8 @@ class Loop {
   bool worth_trying(Round& round, const ModelState& state, const Candidate* best, double held_out_p,
                     const std::string& context = "") {
     const double p = state.fitted.chi.p;
-    const Attribute a =
-        should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha, def_.decisive_score_p, held_out_p);
-    const std::string residual =
-        p < def_.alpha ? fmt::format("the residual is not consistent with the noise (chi2 p = {:.3g})", p)
-                       : fmt::format("the held-out points are not consistent with the noise (fresh seeds, chi2 p = {:.3g}; "
-                                     "the fitted points' chi2 p = {:.3g})", held_out_p, p);
-    switch (a) {
+    switch (should_attribute(p, best != nullptr, best ? best->p_adjusted : 1.0, def_.alpha, def_.decisive_score_p,
+                             held_out_p)) {
       case Attribute::yes: return true;
       case Attribute::decisive_score:
         say(fmt::format("{}the residual's chi2 is within the noise (p = {:.3g}) but {}'s score is decisive (adjusted p = "
@@ -250,8 +245,11 @@ class Loop {
         break;
       case Attribute::nothing_visible: round.decision = "no catalogue effect is visible in this design"; break;
       case Attribute::nothing_significant:
-        round.decision = fmt::format("no effect's score is significant (best {}: adjusted p = {:.3g}) although {}",
-                                     best->effect, best->p_adjusted, residual);
+        round.decision = fmt::format(
+            "no effect's score is significant (best {}: adjusted p = {:.3g}) although {}", best->effect, best->p_adjusted,
+            p < def_.alpha ? fmt::format("the residual is not consistent with the noise (chi2 p = {:.3g})", p)
+                           : fmt::format("the held-out points are not consistent with the noise (fresh seeds, chi2 p = "
+                                         "{:.3g}; the fitted points' chi2 p = {:.3g})", held_out_p, p));
         break;
     }
     round.decision = context + round.decision;

@@ -82,9 +82,13 @@ Reference EffectResponses::reference_with(const BaselineFit& base, const Paramet
   for (const EffectTerm& t : effects) at.push_back(fmt::format("{} = {:.4g}", t.key, fitted.get(t.key, t.neutral)));
   say_(fmt::format("reference: the {} grid node(s) nearest the fit, {} ({} runs, reused where made)", r.nodes.size(),
                    fmt::join(at, "; "),
-                   r.nodes.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
+                   batch_runs(r.nodes.size())));
   r.predictions = ev_.evaluate(r.nodes);
   return r;
+}
+
+std::size_t EffectResponses::batch_runs(std::size_t parameter_sets) const {
+  return parameter_sets * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates);
 }
 
 std::vector<Prediction> EffectResponses::evaluate_at(const Reference& at, const std::vector<ParameterSet>& sets) {
@@ -96,7 +100,7 @@ Reference EffectResponses::on_own_seeds(const Reference& at, std::uint64_t seed)
   r.seed = seed;
   say_(fmt::format("signatures on seeds of their own (base seed {}): the {} reference node(s) run again ({} runs)", seed,
                    r.nodes.size(),
-                   r.nodes.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
+                   batch_runs(r.nodes.size())));
   r.predictions = evaluate_at(r, r.nodes);
   return r;
 }
@@ -184,7 +188,7 @@ void EffectResponses::measure_signatures(std::vector<Candidate>& cands, const st
   for (std::size_t c : which)
     for (const ParameterSet& n : at.nodes) sets.push_back(n.with(cands[c].key, cands[c].neutral + cands[c].step));
   say_(fmt::format("signatures: {} effect(s) {} at {} node(s) ({} runs)", which.size(), why, at.nodes.size(),
-                   sets.size() * data_.distinct_runs_per_replicate() * static_cast<std::size_t>(data_.model_replicates)));
+                   batch_runs(sets.size())));
   const std::vector<Prediction> moved = evaluate_at(at, sets);
   for (std::size_t k = 0; k < which.size(); ++k) {
     Candidate& cand = cands[which[k]];

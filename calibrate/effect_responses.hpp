@@ -103,6 +103,8 @@ class EffectResponses {
   void add_sizes(EffectTerm& term, const Candidate& c, const std::vector<double>& offsets, const Reference& at);
   // `sets` run on the reference's seeds.
   std::vector<Prediction> evaluate_at(const Reference& at, const std::vector<ParameterSet>& sets);
+  // Runs behind a batch of `parameter_sets` (every point, every replicate): for the log.
+  std::size_t batch_runs(std::size_t parameter_sets) const;
 
   const DataFile& data_;
   const CalibrationDef& def_;

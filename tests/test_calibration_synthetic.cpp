@@ -179,6 +179,22 @@ SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::stri
 
 double friction(const ModelState& s) { return s.params.get("particles.friction_particle", -1); }
 
+// The explorations' knobs: an environment variable, or the fallback where it is unset.
+double knob(const char* name, double fallback) {
+  const char* v = std::getenv(name);
+  return v ? std::stod(v) : fallback;
+}
+std::string text_knob(const char* name, const char* fallback) {
+  const char* v = std::getenv(name);
+  return std::string(v ? v : fallback);
+}
+
+// A candidate's score as z = estimate / se, signed so that positive points toward its step.
+double z_toward_step(const Candidate& k) {
+  const double z = k.score.estimate * k.score.projected_norm;  // se = 1 / |u~|
+  return k.step > 0 ? z : -z;
+}
+
 // Drag alone was added, its 95 % interval holds the planted size, and the friction is back near its truth.
 void expect_drag_found(const SyntheticRun& run, double planted, double true_friction) {
   const CalibrationResult& r = run.result;
@@ -333,14 +349,6 @@ TEST(CalibrationSynthetic, WithoutNoiseAPlantedDragIsRecoveredWithinOnePercent) 
 // README, "Calibration", limits: the numbers it gave.
 //   GAPFLOW_SEEDS=3 build/tests/gapflow_tests --gtest_also_run_disabled_tests --gtest_filter='*SizeBias*'
 TEST(CalibrationSynthetic, DISABLED_SizeBiasAgainstModelNoise) {
-  const auto knob = [](const char* name, double fallback) {
-    const char* v = std::getenv(name);
-    return v ? std::stod(v) : fallback;
-  };
-  const auto text_knob = [](const char* name, const char* fallback) {
-    const char* v = std::getenv(name);
-    return std::string(v ? v : fallback);
-  };
   const std::string own_in = text_knob("GAPFLOW_OWN_NOISE_IN", "all");
   ASSERT_TRUE(own_in == "all" || own_in == "drag" || own_in == "drag-free") << "GAPFLOW_OWN_NOISE_IN: all, drag or drag-free";
   const NoiseScope noise({knob("GAPFLOW_COMMON_NOISE", 0.005), knob("GAPFLOW_OWN_NOISE", 0.03),
@@ -381,8 +389,7 @@ double mean_z_toward_step(bool independent_signatures, int& scored) {
     if (r.rounds.empty()) continue;
     for (const Candidate& k : r.rounds.front().candidates) {
       if (!k.visible) continue;
-      const double z = k.score.estimate * k.score.projected_norm;  // estimate / se
-      sum += k.step > 0 ? z : -z;
+      sum += z_toward_step(k);
       ++scored;
     }
   }
@@ -408,10 +415,6 @@ TEST(CalibrationSynthetic, SignaturesOnSeedsOfTheirOwnRemoveTheScoresLeanOnNullT
 // (default 4), GAPFLOW_SEEDS (default 20).
 //   GAPFLOW_SEEDS=20 build/tests/gapflow_tests --gtest_also_run_disabled_tests --gtest_filter='*NullScores*'
 TEST(CalibrationSynthetic, DISABLED_NullScores) {
-  const auto knob = [](const char* name, double fallback) {
-    const char* v = std::getenv(name);
-    return v ? std::stod(v) : fallback;
-  };
   const NoiseScope noise({knob("GAPFLOW_COMMON_NOISE", 0.005), knob("GAPFLOW_OWN_NOISE", 0.03)});
   const int reps = static_cast<int>(knob("GAPFLOW_MODEL_REPS", 4));
   const auto seeds = static_cast<std::uint64_t>(knob("GAPFLOW_SEEDS", 20));
@@ -432,8 +435,7 @@ TEST(CalibrationSynthetic, DISABLED_NullScores) {
         const bool lean = k.score.estimate * k.step > 0;
         toward += lean;
         ++scored;
-        const double z = k.score.projected_norm > 0 ? k.score.estimate * k.score.projected_norm : 0;
-        sum_z += k.step > 0 ? z : -z;
+        sum_z += z_toward_step(k);
         line += fmt::format(" {} {:+.3g} (p adj {:.3g})", k.effect, k.score.estimate / k.step, k.p_adjusted);
       }
       below_05 += best < 0.05, below_01 += best < 0.01;
