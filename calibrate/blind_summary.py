@@ -165,6 +165,12 @@ def main(out):
     # The design the twins were made from (the script records it from pass 10 on; before, the first one).
     design_file = out / "design"
     design = design_file.read_text().strip() if design_file.exists() else "data/blind/design.toml"
+    # Whose draw of the model's noise the calibrations fit (recorded from pass 20 on; before, the design's).
+    seeds_file = out / "model_seeds"
+    model_seeds = seeds_file.read_text().strip() if seeds_file.exists() else "design"
+    seeds_text = ("every twin its own model seed (its seed), so the twins are independent draws of the model's noise"
+                  if model_seeds == "per-twin" else
+                  "every twin the design's model seed, so every calibration fits one draw of the model's noise")
     single = [r for r in rows if r["truth"] not in NOT_SINGLE]
     nulls = [r for r in rows if r["truth"] == "none"]
     outside = [r for r in rows if r["truth"] == "outside the catalogue"]
@@ -248,7 +254,7 @@ def main(out):
         "# Calibration loop: blind study",
         "",
         f"Made by `studies/calibration_blind.sh` (twins of `{design}`, each calibrated blind with the 2D model; "
-        f"this page by `/usr/bin/python3 calibrate/blind_summary.py {out}`). Truth per twin in `truth/`, "
+        f"{seeds_text}; this page by `/usr/bin/python3 calibrate/blind_summary.py {out}`). Truth per twin in `truth/`, "
         "each calibration's report data in `<case>/`, one row per twin in `cases.csv`.",
         "",
         f"* twins finished: {len(rows)}",

@@ -44,3 +44,10 @@ planted_options() {
     esac
   done
 }
+
+# The `gapflow twin` options that give a twin of seed SEED its model seed under MODEL_SEEDS MODE
+# (design | per-twin; studies/calibration_blind.sh), in the array seed_options.
+model_seed_options() {
+  seed_options=()
+  if [[ $1 == per-twin ]]; then seed_options=(--model-seed "$2"); fi
+}

@@ -35,6 +35,8 @@ done
 [[ -f $store ]] || echo "note: no store $store: every twin is simulated again" >&2
 seed_offset=$(cat "$pass/seed_offset")
 design=${DESIGN:-$(cat "$pass/design")}
+model_seeds=design   # a pass without the record used the design's model seed
+[[ -f $pass/model_seeds ]] && model_seeds=$(cat "$pass/model_seeds")
 # What may differ between the pass's twin and the remade one: the scenario line (a committed pass
 # rewrites it), and with another design its name (first line, description) and the model's replicates
 # (the first `replicates =` line; the points' own come after it).
@@ -49,10 +51,12 @@ echo "$blind_cases" | while read -r id model seed planted; do
   [[ $only == "  " || $only == *" $id "* ]] || continue
   # shellcheck disable=SC2086  # the planted list is space-separated words
   planted_options $planted
+  model_seed_options "$model_seeds" $((seed + seed_offset))
   if [[ ! -f $out/truth/$id.json ]]; then
     echo "== twin $id" >&2
     "$gapflow" twin "$design" --out "$out/twins/$id.toml" --truth "$out/truth/$id.json.part" --model "$model" \
-      --seed $((seed + seed_offset)) --replicates 10 --name "$id" --jobs "$jobs" --db "$store" "${twin_options[@]}" >&2
+      --seed $((seed + seed_offset)) --replicates 10 --name "$id" --jobs "$jobs" --db "$store" "${twin_options[@]}" \
+      "${seed_options[@]}" >&2
     if ! diff <(comparable "$pass/twins/$id.toml") <(comparable "$out/twins/$id.toml") > /dev/null; then
       echo "error: the remade $id differs from $pass/twins/$id.toml: not the pass's twin" >&2
       exit 1

@@ -4,13 +4,20 @@
 # the 2D model; then the summary (confusion matrix, interval coverage, null
 # false-positive rate, held-out error before/after) in OUT/report.md.
 #
-#   studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN] [CALIBRATE OPTIONS...]
+#   [MODEL_SEEDS=design|per-twin] studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN] [CALIBRATE OPTIONS...]
 #       (default results/calibration-blind, all cores, offset 0, data/blind/design.toml; options
 #       after DESIGN go to every `gapflow calibrate`, e.g. --decisive-score 1e-4)
 #
 # SEED_OFFSET is added to every case's seed: another offset draws another set of twins (other
 # sizes, other data noise) for the same cases, to test rules chosen after seeing one set on
 # twins they have not seen. Pass 5 (results/calibration-blind) used offset 1000.
+#
+# MODEL_SEEDS says which draw of the model's noise each calibration fits. `design` (the default, and
+# every pass up to 19): the design's [model] seed in every twin, so every calibration of every pass
+# fits the same model runs at a grid node (they are shared, which is cheap) and the passes sample the
+# data's noise only. `per-twin`: each twin carries its own seed as its [model] seed (its data are
+# made on other seeds, design seed + 1000003 + seed), so the twins are independent draws of the
+# model's noise too; nothing is shared between calibrations, which costs about 4.5 times the runs.
 #
 # Resumable: a twin file or a calibration summary that exists is not made again,
 # and every run is kept in OUT/runs.sqlite (calibrations: identical runs are shared
@@ -56,6 +63,20 @@ if [[ $recorded_options != "$options_text" ]] && compgen -G "$out/*/summary.json
   exit 2
 fi
 echo "$options_text" > "$out/calibrate_options"
+# And the model seeds (an OUT without a record used the design's).
+model_seeds=${MODEL_SEEDS:-design}
+if [[ $model_seeds != design && $model_seeds != per-twin ]]; then
+  echo "error: MODEL_SEEDS is '$model_seeds'; allowed: design, per-twin" >&2
+  exit 2
+fi
+recorded_seeds=""
+if [[ -f $out/model_seeds ]]; then recorded_seeds=$(cat "$out/model_seeds")
+elif compgen -G "$out/twins/*.toml" > /dev/null; then recorded_seeds=design; fi
+if [[ -n $recorded_seeds && $recorded_seeds != "$model_seeds" ]]; then
+  echo "error: $out was made with MODEL_SEEDS=$recorded_seeds, not $model_seeds; use another OUT" >&2
+  exit 2
+fi
+echo "$model_seeds" > "$out/model_seeds"
 
 # The cases (id, model, seed, planted): studies/blind_cases.sh.
 source studies/blind_cases.sh
@@ -67,9 +88,11 @@ echo "$blind_cases" | while read -r id model seed planted; do
   if [ ! -f "$twin" ]; then
     # shellcheck disable=SC2086  # the planted list is space-separated words
     planted_options $planted
+    model_seed_options "$model_seeds" "$seed"
     echo "== twin $id ($model, seed $seed): ${planted:-nothing planted}" >&2
     "$gapflow" twin "$design" --out "$twin" --truth "$out/truth/$id.json" --model "$model" --seed "$seed" \
-      --replicates 10 --name "$id" --jobs "$jobs" --db "$out/twin_runs.sqlite" "${twin_options[@]}"
+      --replicates 10 --name "$id" --jobs "$jobs" --db "$out/twin_runs.sqlite" "${twin_options[@]}" \
+      "${seed_options[@]}"
   fi
   if [ ! -f "$out/$id/summary.json" ]; then
     echo "== calibrate $id (2d, blind)" >&2

@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# studies/calibration_blind.sh and studies/blind_resignal.sh with a stand-in gapflow (~2 s): which
+# model seed each twin is given (MODEL_SEEDS=per-twin: the twin's own seed; design: none, so the
+# design's), that an OUT made with one setting refuses the other (exit 2, nothing remade), that a
+# resume makes and calibrates nothing again, and that the summary says which draw the pass fits.
+#   tests/blind_study_script_test.sh
+set -euo pipefail
+src=$(cd "$(dirname "$0")/.." && pwd)
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# The stand-in: logs its arguments; `twin` writes the twin (its [model] seed: --model-seed, else 1)
+# and a truth with nothing planted; `calibrate` writes a summary that found nothing.
+cat > "$work/gapflow" <<'STUB'
+#!/usr/bin/env bash
+echo "$*" >> "$STUB_LOG"
+command=$1; shift
+out="" truth="" model_seed=1
+while [[ $# -gt 0 ]]; do
+  case $1 in
+    --out) out=$2; shift ;;
+    --truth) truth=$2; shift ;;
+    --model-seed) model_seed=$2; shift ;;
+  esac
+  shift
+done
+if [[ $command == twin ]]; then
+  printf '[model]\nscenario = "x.toml"\nseed = %s\n' "$model_seed" > "$out"
+  printf '{"twin": "t", "model": "2d", "seed": 1, "planted": [{"name": "free", "key": "k", "value": 0.3, "neutral": null}], "measured": {}}\n' > "$truth"
+else
+  mkdir -p "$out"
+  : > "$out/report.md"
+  errors='{"n": 12, "rmse": 0.1, "rms_whitened": 1.0, "chi2": 12.0, "dof": 12, "p": 0.5, "invalid": 0}'
+  printf '{"effects": [], "verdict": "consistent with noise", "poor_fit": false, "held_out_beyond_noise": false, "before": {"fitted": %s, "held_out_fresh": %s}, "after": {"params": {"k": 0.3}, "fitted": %s, "held_out_fresh": %s}, "measured_free": [], "rounds": [], "runs_simulated": 10, "runs_reused": 0, "run_seconds": 1.0, "wall_seconds": 1.0}\n' \
+    "$errors" "$errors" "$errors" "$errors" > "$out/summary.json"
+fi
+STUB
+chmod +x "$work/gapflow"
+export GAPFLOW=$work/gapflow STUB_LOG=$work/log
+blind() { "$src/studies/calibration_blind.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
+design=data/blind/design_v2.toml
+source "$src/studies/blind_cases.sh"
+cases=$(grep -c . <<< "$blind_cases")
+
+MODEL_SEEDS=per-twin blind "$work/own" 1 16000 $design || fail "per-twin pass: $(cat "$work/stderr")"
+while read -r id model seed planted; do
+  [[ -n $id ]] || continue
+  grep -qx "seed = $((seed + 16000))" "$work/own/twins/$id.toml" || fail "$id: not its own model seed"
+done <<< "$blind_cases"
+[[ $(grep -c '^calibrate ' "$work/log") == "$cases" ]] || fail "not $cases calibrations"
+grep -q "every twin its own model seed" "$work/own/report.md" || fail "the summary does not say the seeds are per twin"
+
+blind "$work/shared" 1 16000 $design || fail "design-seed pass: $(cat "$work/stderr")"
+if grep -q -- "--model-seed" <(grep "shared/twins" "$work/log"); then fail "MODEL_SEEDS=design gave a model seed"; fi
+grep -q "one draw of the model's noise" "$work/shared/report.md" || fail "the summary does not say one draw"
+
+# A resume makes nothing again; the other setting, or a bad one, is refused before anything is made.
+: > "$work/log"
+MODEL_SEEDS=per-twin blind "$work/own" 1 16000 $design || fail "resume: $(cat "$work/stderr")"
+[[ ! -s $work/log ]] || fail "a resume ran gapflow: $(head -1 "$work/log")"
+rm "$work/own/null-1/summary.json" "$work/own/twins/null-1.toml"
+set +e
+blind "$work/own" 1 16000 $design; rc_default=$?
+MODEL_SEEDS=perTwin blind "$work/new" 1 16000 $design; rc_bad=$?
+set -e
+[[ $rc_default == 2 ]] || fail "a per-twin OUT resumed with the design's seeds: exit $rc_default"
+[[ $rc_bad == 2 ]] || fail "MODEL_SEEDS=perTwin: exit $rc_bad"
+grep -q "allowed: design, per-twin" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
+[[ ! -s $work/log ]] || fail "a refused run ran gapflow: $(head -1 "$work/log")"
+[[ $(cat "$work/own/model_seeds") == per-twin ]] || fail "a refused run changed the record"
+
+# The oracle's remaking gives each twin the model seed the pass gave it (else its twin differs).
+"$src/studies/blind_resignal.sh" "$work/own" "$work/resignal" "$work/none.sqlite" 1 rolling-low \
+  > /dev/null 2> "$work/stderr" || true
+grep -q -- "--model-seed 16111" "$work/log" || fail "blind_resignal.sh did not remake rolling-low with its model seed"
+if grep -q "differs from" "$work/stderr"; then fail "the remade twin differs: $(cat "$work/stderr")"; fi
+echo "ok"
