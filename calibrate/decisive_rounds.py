@@ -13,10 +13,10 @@ replay's decisions are the pass's own. Prints each round with Q < P and a count 
 pass's calibrations only (folders with a summary.json; a replay folder's own calibrations lie a
 level deeper). Exit 2 on a folder without calibrations.
 """
-import glob
 import os
 import re
 import sys
+from blind_pass import calibrations
 
 STOPPED = re.compile(r"consistent with the noise \(chi2 p = ([0-9.eE+-]+)\): nothing to explain "
                      r"\(best candidate ([a-z_]+): adjusted p = ([0-9.eE+-]+)\)")
@@ -38,8 +38,7 @@ def main():
         sys.exit(2)
     threshold = float(sys.argv[1])
     for pass_dir in sys.argv[2:]:
-        reports = [os.path.join(os.path.dirname(s), "report.md")
-                   for s in sorted(glob.glob(os.path.join(pass_dir, "*", "summary.json")))]
+        reports = [os.path.join(os.path.dirname(s), "report.md") for _, s in calibrations(pass_dir)]
         if not reports:
             print(f"error: no calibrations in {pass_dir}", file=sys.stderr)
             sys.exit(2)

@@ -11,11 +11,11 @@ equally often. Each miss also says how far the fit left the free parameter from 
 lines compare that
 distance between the intervals that held and those that missed, over all passes given.
 """
-import glob
 import json
 import os
 import statistics
 import sys
+from blind_pass import calibrations
 
 
 def friction_sigmas(summary):
@@ -33,8 +33,7 @@ def sides(pass_dir):
     parameter's distance from its measurement (in its standard errors) for each interval, by side."""
     covered, toward, away = 0, [], []
     far = {"covered": [], "toward": [], "away": []}
-    for summary in sorted(glob.glob(os.path.join(pass_dir, "*", "summary.json"))):
-        case = os.path.basename(os.path.dirname(summary))
+    for case, summary in calibrations(pass_dir):
         truth_file = os.path.join(pass_dir, "truth", case + ".json")
         if not os.path.exists(truth_file):
             continue

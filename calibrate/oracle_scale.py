@@ -28,6 +28,7 @@ import statistics
 import sys
 
 from blind_summary import NOT_SINGLE, VISIBLE_POWER, truth_label
+from blind_pass import calibrations
 
 BINS = ((0, 10), (10, 50), (50, math.inf))
 
@@ -41,8 +42,7 @@ def twins(pass_dir, truth_dir=None):
         with open(os.path.join(pass_dir, "cases.csv"), newline="") as f:
             identified = {r["case"]: r["identified"] for r in csv.DictReader(f)}
     out = []
-    for summary_file in sorted(glob.glob(os.path.join(pass_dir, "*", "summary.json"))):
-        case = os.path.basename(os.path.dirname(summary_file))
+    for case, summary_file in calibrations(pass_dir):
         truth_file = os.path.join(truth_dir, case + ".json")
         old_truth_file = os.path.join(pass_dir, "truth", case + ".json")
         if not os.path.exists(old_truth_file):

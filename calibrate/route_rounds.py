@@ -16,11 +16,11 @@ truth/CASE.json), the round, the candidate, the outcome, whether what was added 
 inside a pass folder) are not the pass's calibrations and are skipped. Exit 2 on a folder without
 calibrations.
 """
-import glob
 import json
 import os
 import re
 import sys
+from blind_pass import calibrations
 
 FIRED = re.compile(r"the fitted points are within the noise \(chi2 p = ([0-9.eE+-]+)\) but the held-out points "
                    r"are not \(fresh seeds, chi2 p = ([0-9.eE+-]+)\): ([a-z_]+) \(adjusted p = ([0-9.eE+-]+)\) tried")
@@ -70,8 +70,7 @@ def main():
         print("usage: route_rounds.py PASS_DIR [PASS_DIR...]", file=sys.stderr)
         sys.exit(2)
     for pass_dir in sys.argv[1:]:
-        summaries = sorted(s for s in glob.glob(os.path.join(pass_dir, "*", "summary.json"))
-                           if not os.path.basename(os.path.dirname(s)).startswith("replay-"))
+        summaries = [s for _, s in calibrations(pass_dir)]
         if not summaries:
             print(f"error: no calibrations in {pass_dir}", file=sys.stderr)
             sys.exit(2)

@@ -15,10 +15,9 @@ only the nulls (planted effects lean toward their own steps by design: a check o
 the loop). With --cases, those cases only. Exit 2 on a folder without such calibrations.
 """
 import collections
-import glob
 import json
-import os
 import sys
+from blind_pass import calibrations
 
 
 def first_round_candidates(summary_path):
@@ -47,9 +46,7 @@ def main():
     toward, scored = collections.Counter(), collections.Counter()
     best_p = []
     for pass_dir in args:
-        summaries = sorted(s for s in glob.glob(os.path.join(pass_dir, pattern, "summary.json"))
-                           if not os.path.basename(os.path.dirname(s)).startswith("replay-")
-                           and (only is None or os.path.basename(os.path.dirname(s)) in only))
+        summaries = [s for _, s in calibrations(pass_dir, pattern, only)]
         if not summaries:
             print(f"error: no {pattern} calibrations in {pass_dir}", file=sys.stderr)
             sys.exit(2)
