@@ -112,6 +112,11 @@ class BlindAnalysis(unittest.TestCase):
             # once. A round table stands once.
             decisions = "".join(line for line in report.splitlines(True) if line.startswith("Decision:"))
             (cls.pass_dir / case / "report.md").write_text(report + decisions)
+        # A replay kept in the pass folder (spin-high calibrated again): not one of the pass's twins.
+        replay = cls.pass_dir / "replay-spin-high"
+        replay.mkdir()
+        (replay / "summary.json").write_text((cls.pass_dir / "spin-high" / "summary.json").read_text())
+        (replay / "report.md").write_text((cls.pass_dir / "spin-high" / "report.md").read_text())
         code, cls.summary_out, err = run("blind_summary.py", cls.pass_dir)
         assert code == 0, err
         with open(cls.pass_dir / "cases.csv", newline="") as f:
@@ -166,6 +171,7 @@ class BlindAnalysis(unittest.TestCase):
                       "median |distance| 1.00 se", out)
 
     def test_decisive_rounds_finds_the_stopped_round_once(self):
+        # Once: the replay of spin-high beside the pass is not counted.
         code, out, _ = run("decisive_rounds.py", "1e-3", self.pass_dir)
         self.assertEqual(code, 0)
         self.assertIn("spin-high: chi2 p 0.31, spinning_friction adjusted p 0.0002 < 0.001", out)
