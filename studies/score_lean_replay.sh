@@ -1,14 +1,19 @@
 #!/usr/bin/env bash
-# Twins of a finished blind pass (default its nulls) calibrated again with the signatures on seeds of
-# their own (--independent-signatures), on a copy of the pass's store: the same twins and seeds, so the
-# baseline and its runs are the pass's, and only the signatures' runs are new. Not blind: a check on
-# the simulator of whether the first round's scores lean toward the effects' steps because the
-# signatures shared the baseline nodes' runs (README, Calibration, item 3). Writes OUT/<case>/ (report,
-# summary.json, log) and prints calibrate/score_lean.py for the pass's own calibrations of those cases
-# and for OUT's. Resumable (finished cases kept; OUT/runs.sqlite, the copy, is not committed).
+# Twins of a finished blind pass (default its nulls) calibrated again with the other setting of
+# --independent-signatures than the pass's (the pass's other calibrate options kept), on a copy of the
+# pass's store: the same twins and seeds, so the baseline and its runs are the pass's, and only the
+# signatures' runs differ. Not blind: a check on the simulator of whether the first round's scores
+# lean toward the effects' steps because the signatures shared the baseline nodes' runs (README,
+# Calibration, item 3); on a pass with a model seed per twin (MODEL_SEEDS=per-twin) each null is its
+# own draw of the model's noise, and the two settings are compared on the same draws. Writes
+# OUT/<case>/ (report, summary.json, log) and prints calibrate/score_lean.py for the pass's own
+# calibrations of those cases and for OUT's. Resumable (finished cases kept; OUT/runs.sqlite, the
+# copy, is not committed).
 #
 #   GAPFLOW=<binary> studies/score_lean_replay.sh PASS STORE OUT [JOBS] [CASE...]
 #   e.g. studies/score_lean_replay.sh results/calibration-blind-pass16 /work/pass16-stores/runs.sqlite /work/lean16 2
+# (Until pass 20 it always added --independent-signatures and dropped the pass's options: pass 16's
+# replay ran without its --decisive-score 1e-4, which the first round's scores do not depend on.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ $# -ge 3 ]] || { echo "usage: studies/score_lean_replay.sh PASS STORE OUT [JOBS] [CASE...]" >&2; exit 2; }
@@ -20,15 +25,25 @@ gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 if [[ ${#cases[@]} -eq 0 ]]; then
   for twin in "$pass"/twins/null-*.toml; do cases+=("$(basename "$twin" .toml)"); done
 fi
+# The pass's options (a pass without the record ran with none), the signatures' setting toggled.
+options=()
+if [[ -f $pass/calibrate_options ]]; then read -r -a options < "$pass/calibrate_options" || true; fi
+replay_options=()
+for o in "${options[@]}"; do [[ $o == --independent-signatures ]] || replay_options+=("$o"); done
+if [[ ${#replay_options[@]} -eq ${#options[@]} ]]; then
+  replay_options+=(--independent-signatures); label="with --independent-signatures"
+else
+  label="without --independent-signatures"
+fi
 mkdir -p "$out"
 [[ -f $out/runs.sqlite ]] || { cp "$store" "$out/runs.sqlite.partial" && mv "$out/runs.sqlite.partial" "$out/runs.sqlite"; }
 for id in "${cases[@]}"; do
   [[ -f $pass/twins/$id.toml ]] || { echo "error: no twin $id in $pass" >&2; exit 2; }
   [[ -f $out/$id/summary.json ]] && continue
   "$gapflow" calibrate "$pass/twins/$id.toml" --model 2d --db "$out/runs.sqlite" --out "$out/$id" --jobs "$jobs" \
-    --no-plots --independent-signatures > "$out/$id.log" 2>&1 || { echo "error: $id failed; see $out/$id.log" >&2; exit 1; }
+    --no-plots "${replay_options[@]}" > "$out/$id.log" 2>&1 || { echo "error: $id failed; see $out/$id.log" >&2; exit 1; }
 done
 echo "== the pass ($pass)"
 /usr/bin/python3 calibrate/score_lean.py --cases "${cases[*]}" "$pass"
-echo "== with --independent-signatures ($out)"
+echo "== $label ($out): options '${replay_options[*]}'"
 /usr/bin/python3 calibrate/score_lean.py --cases "${cases[*]}" "$out"

@@ -2,7 +2,8 @@
 # studies/calibration_blind.sh and studies/blind_resignal.sh with a stand-in gapflow (~2 s): which
 # model seed each twin is given (MODEL_SEEDS=per-twin: the twin's own seed; design: none, so the
 # design's), that an OUT made with one setting refuses the other (exit 2, nothing remade), that a
-# resume makes and calibrates nothing again, and that the summary says which draw the pass fits.
+# resume makes and calibrates nothing again, that the summary says which draw the pass fits, and
+# that studies/score_lean_replay.sh replays with the other setting of --independent-signatures.
 #   tests/blind_study_script_test.sh
 set -euo pipefail
 src=$(cd "$(dirname "$0")/.." && pwd)
@@ -75,4 +76,13 @@ grep -q "allowed: design, per-twin" "$work/stderr" || fail "no clear error: $(ca
   > /dev/null 2> "$work/stderr" || true
 grep -q -- "--model-seed 16111" "$work/log" || fail "blind_resignal.sh did not remake rolling-low with its model seed"
 if grep -q "differs from" "$work/stderr"; then fail "the remade twin differs: $(cat "$work/stderr")"; fi
+# A replay of the nulls toggles the signatures' setting and keeps the pass's other options.
+touch "$work/store.sqlite"
+: > "$work/log"
+"$src/studies/score_lean_replay.sh" "$work/own" "$work/store.sqlite" "$work/lean-own" 1 null-2 > /dev/null 2>&1 || true
+grep -q -- "--no-plots --independent-signatures$" "$work/log" || fail "the replay of a pass without the option: $(cat "$work/log")"
+blind "$work/both" 1 16000 $design --held-out-route --independent-signatures || fail "pass with options: $(cat "$work/stderr")"
+: > "$work/log"
+"$src/studies/score_lean_replay.sh" "$work/both" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2>&1 || true
+grep -q -- "--no-plots --held-out-route$" "$work/log" || fail "the replay of a pass with the option: $(cat "$work/log")"
 echo "ok"
