@@ -4,7 +4,7 @@
 # the 2D model; then the summary (confusion matrix, interval coverage, null
 # false-positive rate, held-out error before/after) in OUT/report.md.
 #
-#   [MODEL_SEEDS=design|per-twin] studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN] [CALIBRATE OPTIONS...]
+#   [MODEL_SEEDS=per-twin|design] studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN] [CALIBRATE OPTIONS...]
 #       (default results/calibration-blind, all cores, offset 0, data/blind/design.toml; options
 #       after DESIGN go to every `gapflow calibrate`, e.g. --decisive-score 1e-4)
 #
@@ -12,12 +12,13 @@
 # sizes, other data noise) for the same cases, to test rules chosen after seeing one set on
 # twins they have not seen. Pass 5 (results/calibration-blind) used offset 1000.
 #
-# MODEL_SEEDS says which draw of the model's noise each calibration fits. `design` (the default, and
-# every pass up to 19): the design's [model] seed in every twin, so every calibration of every pass
-# fits the same model runs at a grid node (they are shared, which is cheap) and the passes sample the
-# data's noise only. `per-twin`: each twin carries its own seed as its [model] seed (its data are
-# made on other seeds, design seed + 1000003 + seed), so the twins are independent draws of the
-# model's noise too; nothing is shared between calibrations, which costs about 4.5 times the runs.
+# MODEL_SEEDS says which draw of the model's noise each calibration fits. `per-twin` (the default
+# from pass 20 on): each twin carries its own seed as its [model] seed (its data are made on other
+# seeds, design seed + 1000003 + seed), so the twins are independent draws of the model's noise as
+# well as the data's; nothing is shared between calibrations, which costs about 4.5 times the runs.
+# `design` (every pass up to 19): the design's [model] seed in every twin, so every calibration of
+# every pass fits the same model runs at a grid node (shared, which is cheap), and a pass samples
+# the data's noise only: its count is one draw of the model's noise, not the loop's rate.
 #
 # Resumable: a twin file or a calibration summary that exists is not made again,
 # and every run is kept in OUT/runs.sqlite (calibrations: identical runs are shared
@@ -64,7 +65,7 @@ if [[ $recorded_options != "$options_text" ]] && compgen -G "$out/*/summary.json
 fi
 echo "$options_text" > "$out/calibrate_options"
 # And the model seeds (an OUT without a record used the design's).
-model_seeds=${MODEL_SEEDS:-design}
+model_seeds=${MODEL_SEEDS:-per-twin}
 if [[ $model_seeds != design && $model_seeds != per-twin ]]; then
   echo "error: MODEL_SEEDS is '$model_seeds'; allowed: design, per-twin" >&2
   exit 2

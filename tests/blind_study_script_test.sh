@@ -44,7 +44,7 @@ design=data/blind/design_v2.toml
 source "$src/studies/blind_cases.sh"
 cases=$(grep -c . <<< "$blind_cases")
 
-MODEL_SEEDS=per-twin blind "$work/own" 1 16000 $design || fail "per-twin pass: $(cat "$work/stderr")"
+blind "$work/own" 1 16000 $design || fail "per-twin pass (the default): $(cat "$work/stderr")"
 while read -r id model seed planted; do
   [[ -n $id ]] || continue
   grep -qx "seed = $((seed + 16000))" "$work/own/twins/$id.toml" || fail "$id: not its own model seed"
@@ -52,17 +52,17 @@ done <<< "$blind_cases"
 [[ $(grep -c '^calibrate ' "$work/log") == "$cases" ]] || fail "not $cases calibrations"
 grep -q "every twin its own model seed" "$work/own/report.md" || fail "the summary does not say the seeds are per twin"
 
-blind "$work/shared" 1 16000 $design || fail "design-seed pass: $(cat "$work/stderr")"
+MODEL_SEEDS=design blind "$work/shared" 1 16000 $design || fail "design-seed pass: $(cat "$work/stderr")"
 if grep -q -- "--model-seed" <(grep "shared/twins" "$work/log"); then fail "MODEL_SEEDS=design gave a model seed"; fi
 grep -q "one draw of the model's noise" "$work/shared/report.md" || fail "the summary does not say one draw"
 
 # A resume makes nothing again; the other setting, or a bad one, is refused before anything is made.
 : > "$work/log"
-MODEL_SEEDS=per-twin blind "$work/own" 1 16000 $design || fail "resume: $(cat "$work/stderr")"
+blind "$work/own" 1 16000 $design || fail "resume: $(cat "$work/stderr")"
 [[ ! -s $work/log ]] || fail "a resume ran gapflow: $(head -1 "$work/log")"
 rm "$work/own/null-1/summary.json" "$work/own/twins/null-1.toml"
 set +e
-blind "$work/own" 1 16000 $design; rc_default=$?
+MODEL_SEEDS=design blind "$work/own" 1 16000 $design; rc_default=$?
 MODEL_SEEDS=perTwin blind "$work/new" 1 16000 $design; rc_bad=$?
 set -e
 [[ $rc_default == 2 ]] || fail "a per-twin OUT resumed with the design's seeds: exit $rc_default"
@@ -81,7 +81,7 @@ touch "$work/store.sqlite"
 : > "$work/log"
 "$src/studies/score_lean_replay.sh" "$work/own" "$work/store.sqlite" "$work/lean-own" 1 null-2 > /dev/null 2>&1 || true
 grep -q -- "--no-plots --independent-signatures$" "$work/log" || fail "the replay of a pass without the option: $(cat "$work/log")"
-blind "$work/both" 1 16000 $design --held-out-route --independent-signatures || fail "pass with options: $(cat "$work/stderr")"
+MODEL_SEEDS=design blind "$work/both" 1 16000 $design --held-out-route --independent-signatures || fail "pass with options: $(cat "$work/stderr")"
 : > "$work/log"
 "$src/studies/score_lean_replay.sh" "$work/both" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2>&1 || true
 grep -q -- "--no-plots --held-out-route$" "$work/log" || fail "the replay of a pass with the option: $(cat "$work/log")"
