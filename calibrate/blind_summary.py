@@ -168,7 +168,7 @@ def main(out):
     # Whose draw of the model's noise the calibrations fit (recorded from pass 20 on; before, the design's).
     seeds_file = out / "model_seeds"
     model_seeds = seeds_file.read_text().strip() if seeds_file.exists() else "design"
-    seeds_text = ("every twin its own model seed (its seed), so the twins are independent draws of the model's noise"
+    seeds_text = ("every twin its own model seed (1000 x its seed), so the twins are independent draws of the model's noise"
                   if model_seeds == "per-twin" else
                   "every twin the design's model seed, so every calibration fits one draw of the model's noise")
     single = [r for r in rows if r["truth"] not in NOT_SINGLE]

@@ -13,6 +13,7 @@ import json
 import re
 import sys
 from pathlib import Path
+from blind_pass import calibrations
 
 NODE = re.compile(r"^  (\S+)=([-+0-9.eE]+): chi2 = [-+0-9.eE]+(  <- best node)?$")
 AFTER = re.compile(r"^Parameters before: .*After: (\S+?)=([-+0-9.eE]+?)[,.]?(?: |$)")
@@ -41,8 +42,8 @@ def reach(report: Path):
 def main(folders):
     for folder in map(Path, folders):
         outside, total = [], 0
-        for report in sorted(folder.glob("*/report.md")):
-            case = report.parent.name
+        for case, summary in calibrations(folder):
+            report = Path(summary).parent / "report.md"
             truth_file = folder / "truth" / f"{case}.json"
             got = reach(report)
             if got is None or not truth_file.exists():

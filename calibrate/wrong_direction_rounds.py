@@ -9,10 +9,10 @@ below its neutral value although its catalogue range ends there (the effects lis
 range lies on one side of neutral: what calibrate/attribution.hpp's size_direction_possible rules
 out since fc9cfe0). Replay folders are skipped.
 """
-import glob
 import os
 import re
 import sys
+from blind_pass import calibrations
 
 # Catalogue effects whose range has no room below neutral (calibrate/effect_catalogue.cpp).
 ONE_SIDED = {"linear_drag", "spinning_friction", "lateral_tilt", "corner_rounding", "rolling_contact",
@@ -37,7 +37,7 @@ def main():
         sys.exit("usage: wrong_direction_rounds.py PASS_DIR [PASS_DIR...]")
     total = 0
     for pass_dir in sys.argv[1:]:
-        for report in sorted(glob.glob(os.path.join(pass_dir, "*", "report.md"))):
+        for report in [os.path.join(os.path.dirname(s), "report.md") for _, s in calibrations(pass_dir)]:
             with open(report) as f:
                 rounds = re.split(r"^### Round ", f.read(), flags=re.M)[1:]
             for text in rounds:

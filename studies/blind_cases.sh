@@ -46,8 +46,13 @@ planted_options() {
 }
 
 # The `gapflow twin` options that give a twin of seed SEED its model seed under MODEL_SEEDS MODE
-# (design | per-twin; studies/calibration_blind.sh), in the array seed_options.
+# (per-twin | design; studies/calibration_blind.sh), in the array seed_options. Per twin: 1000 x
+# its seed. A calibration runs on its model seed and on it + 7907, 7919 and 7933 (the keep test,
+# the fresh re-score, the signatures' own seeds: calibrate/calibration.hpp); the twins' seeds are
+# consecutive, so their own seeds would meet (one twin's + 7919 is another's + 7907), and twins
+# ending at the same parameters would share runs. Spaced by 1000, no two meet (no difference of
+# those offsets is a multiple of 1000), nor meet a twin's data seeds (design seed + 1000003 + seed).
 model_seed_options() {
   seed_options=()
-  if [[ $1 == per-twin ]]; then seed_options=(--model-seed "$2"); fi
+  if [[ $1 == per-twin ]]; then seed_options=(--model-seed $(($2 * 1000))); fi
 }

@@ -13,16 +13,17 @@
 # twins they have not seen. Pass 5 (results/calibration-blind) used offset 1000.
 #
 # MODEL_SEEDS says which draw of the model's noise each calibration fits. `per-twin` (the default
-# from pass 20 on): each twin carries its own seed as its [model] seed (its data are made on other
-# seeds, design seed + 1000003 + seed), so the twins are independent draws of the model's noise as
-# well as the data's; nothing is shared between calibrations, which costs about 4.5 times the runs.
+# from pass 20 on): each twin carries 1000 x its seed as its [model] seed (studies/blind_cases.sh
+# says why 1000; its data are made on other seeds, design seed + 1000003 + seed), so the twins are
+# independent draws of the model's noise as well as the data's; nothing is shared between
+# calibrations, which costs about 4.5 times the runs.
 # `design` (every pass up to 19): the design's [model] seed in every twin, so every calibration of
 # every pass fits the same model runs at a grid node (shared, which is cheap), and a pass samples
 # the data's noise only: its count is one draw of the model's noise, not the loop's rate.
 #
 # Resumable: a twin file or a calibration summary that exists is not made again,
-# and every run is kept in OUT/runs.sqlite (calibrations: identical runs are shared
-# between twins) and OUT/twin_runs.sqlite (the twins' data). Those two stores are
+# and every run is kept in OUT/runs.sqlite (calibrations; with MODEL_SEEDS=design identical
+# runs are shared between twins) and OUT/twin_runs.sqlite (the twins' data). Those two stores are
 # not committed (hundreds of MB); this script remakes them.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -32,51 +33,44 @@ seed_offset=${3:-0}
 gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 design=${4:-data/blind/design.toml}
 calibrate_options=("${@:5}")
-mkdir -p "$out/twins" "$out/truth"
-# Twins and summaries of one seed offset must not be mixed with another's (an OUT with twins and
-# no record was made before the offset existed: offset 0).
-recorded=""
-if [[ -f $out/seed_offset ]]; then recorded=$(cat "$out/seed_offset")
-elif compgen -G "$out/twins/*.toml" > /dev/null; then recorded=0; fi
-if [[ -n $recorded && $recorded != "$seed_offset" ]]; then
-  echo "error: $out was made with seed offset $recorded, not $seed_offset; use another OUT" >&2
+model_seeds=${MODEL_SEEDS:-per-twin}
+# What an OUT was made with is recorded in it, and a run with other settings is refused (exit 2)
+# before anything is written: twins and summaries of one setting are never mixed with another's.
+# recorded FILE BEFORE: FILE's content; for an OUT with twins and no record (made before the
+# setting existed), BEFORE; else empty.
+recorded() {
+  if [[ -f $out/$1 ]]; then cat "$out/$1"
+  elif compgen -G "$out/twins/*.toml" > /dev/null; then echo "$2"; fi
+}
+refuse_other() {  # NAME RECORDED WANTED
+  if [[ -n $2 && $2 != "$3" ]]; then
+    echo "error: $out was made with $1 $2, not $3; use another OUT" >&2
+    exit 2
+  fi
+}
+if [[ $model_seeds != design && $model_seeds != per-twin ]]; then
+  echo "error: MODEL_SEEDS is '$model_seeds'; allowed: per-twin, design" >&2
   exit 2
 fi
-echo "$seed_offset" > "$out/seed_offset"
-# Likewise the design: twins of one design are never calibrated beside another's (an OUT with twins
-# and no record was made before the design could be chosen: data/blind/design.toml).
 [[ -f $design ]] || { echo "error: no design file $design" >&2; exit 2; }
 design=$(realpath --relative-to=. "$design")
-recorded_design=""
-if [[ -f $out/design ]]; then recorded_design=$(cat "$out/design")
-elif compgen -G "$out/twins/*.toml" > /dev/null; then recorded_design=data/blind/design.toml; fi
-if [[ -n $recorded_design && $recorded_design != "$design" ]]; then
-  echo "error: $out was made from $recorded_design, not $design; use another OUT" >&2
-  exit 2
-fi
-echo "$design" > "$out/design"
-# And the calibrations' options (an OUT without a record ran with none).
+refuse_other "seed offset" "$(recorded seed_offset 0)" "$seed_offset"
+refuse_other design "$(recorded design data/blind/design.toml)" "$design"
+refuse_other MODEL_SEEDS "$(recorded model_seeds design)" "$model_seeds"
+# The calibrations' options matter once one has run (an OUT without a record ran with none).
 options_text="${calibrate_options[*]}"
-recorded_options=""
-if [[ -f $out/calibrate_options ]]; then recorded_options=$(cat "$out/calibrate_options"); fi
-if [[ $recorded_options != "$options_text" ]] && compgen -G "$out/*/summary.json" > /dev/null; then
-  echo "error: $out was calibrated with options '$recorded_options', not '$options_text'; use another OUT" >&2
-  exit 2
+if compgen -G "$out/*/summary.json" > /dev/null; then
+  recorded_options=""
+  if [[ -f $out/calibrate_options ]]; then recorded_options=$(cat "$out/calibrate_options"); fi
+  if [[ $recorded_options != "$options_text" ]]; then
+    echo "error: $out was calibrated with options '$recorded_options', not '$options_text'; use another OUT" >&2
+    exit 2
+  fi
 fi
+mkdir -p "$out/twins" "$out/truth"
+echo "$seed_offset" > "$out/seed_offset"
+echo "$design" > "$out/design"
 echo "$options_text" > "$out/calibrate_options"
-# And the model seeds (an OUT without a record used the design's).
-model_seeds=${MODEL_SEEDS:-per-twin}
-if [[ $model_seeds != design && $model_seeds != per-twin ]]; then
-  echo "error: MODEL_SEEDS is '$model_seeds'; allowed: design, per-twin" >&2
-  exit 2
-fi
-recorded_seeds=""
-if [[ -f $out/model_seeds ]]; then recorded_seeds=$(cat "$out/model_seeds")
-elif compgen -G "$out/twins/*.toml" > /dev/null; then recorded_seeds=design; fi
-if [[ -n $recorded_seeds && $recorded_seeds != "$model_seeds" ]]; then
-  echo "error: $out was made with MODEL_SEEDS=$recorded_seeds, not $model_seeds; use another OUT" >&2
-  exit 2
-fi
 echo "$model_seeds" > "$out/model_seeds"
 
 # The cases (id, model, seed, planted): studies/blind_cases.sh.

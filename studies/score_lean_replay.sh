@@ -35,7 +35,18 @@ if [[ ${#replay_options[@]} -eq ${#options[@]} ]]; then
 else
   label="without --independent-signatures"
 fi
+# An OUT is calibrated with one set of options only (recorded in it; an OUT without the record was
+# made by the script before pass 20, with --independent-signatures alone).
+if [[ -d $out ]]; then
+  recorded_options=--independent-signatures
+  if [[ -f $out/replay_options ]]; then recorded_options=$(cat "$out/replay_options"); fi
+  if [[ $recorded_options != "${replay_options[*]}" ]]; then
+    echo "error: $out was calibrated with '$recorded_options', not '${replay_options[*]}'; use another OUT" >&2
+    exit 2
+  fi
+fi
 mkdir -p "$out"
+echo "${replay_options[*]}" > "$out/replay_options"
 [[ -f $out/runs.sqlite ]] || { cp "$store" "$out/runs.sqlite.partial" && mv "$out/runs.sqlite.partial" "$out/runs.sqlite"; }
 for id in "${cases[@]}"; do
   [[ -f $pass/twins/$id.toml ]] || { echo "error: no twin $id in $pass" >&2; exit 2; }

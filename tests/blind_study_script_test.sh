@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# studies/calibration_blind.sh and studies/blind_resignal.sh with a stand-in gapflow (~2 s): which
-# model seed each twin is given (MODEL_SEEDS=per-twin: the twin's own seed; design: none, so the
-# design's), that an OUT made with one setting refuses the other (exit 2, nothing remade), that a
+# studies/calibration_blind.sh, blind_resignal.sh and score_lean_replay.sh with a stand-in gapflow
+# (~15 s): which model seed each twin is given (MODEL_SEEDS=per-twin, the default: 1000 x its seed;
+# design: none, so the design's), that an OUT made with one setting (or before the record, as
+# pass 19's) refuses the other before writing anything (exit 2), that a
 # resume makes and calibrates nothing again, that the summary says which draw the pass fits, and
 # that studies/score_lean_replay.sh replays with the other setting of --independent-signatures.
 #   tests/blind_study_script_test.sh
@@ -47,7 +48,7 @@ cases=$(grep -c . <<< "$blind_cases")
 blind "$work/own" 1 16000 $design || fail "per-twin pass (the default): $(cat "$work/stderr")"
 while read -r id model seed planted; do
   [[ -n $id ]] || continue
-  grep -qx "seed = $((seed + 16000))" "$work/own/twins/$id.toml" || fail "$id: not its own model seed"
+  grep -qx "seed = $(((seed + 16000) * 1000))" "$work/own/twins/$id.toml" || fail "$id: not its own model seed"
 done <<< "$blind_cases"
 [[ $(grep -c '^calibrate ' "$work/log") == "$cases" ]] || fail "not $cases calibrations"
 grep -q "every twin its own model seed" "$work/own/report.md" || fail "the summary does not say the seeds are per twin"
@@ -55,6 +56,7 @@ grep -q "every twin its own model seed" "$work/own/report.md" || fail "the summa
 MODEL_SEEDS=design blind "$work/shared" 1 16000 $design || fail "design-seed pass: $(cat "$work/stderr")"
 if grep -q -- "--model-seed" <(grep "shared/twins" "$work/log"); then fail "MODEL_SEEDS=design gave a model seed"; fi
 grep -q "one draw of the model's noise" "$work/shared/report.md" || fail "the summary does not say one draw"
+grep -qx "seed = 1" "$work/shared/twins/null-1.toml" || fail "MODEL_SEEDS=design: not the design's seed"
 
 # A resume makes nothing again; the other setting, or a bad one, is refused before anything is made.
 : > "$work/log"
@@ -67,14 +69,26 @@ MODEL_SEEDS=perTwin blind "$work/new" 1 16000 $design; rc_bad=$?
 set -e
 [[ $rc_default == 2 ]] || fail "a per-twin OUT resumed with the design's seeds: exit $rc_default"
 [[ $rc_bad == 2 ]] || fail "MODEL_SEEDS=perTwin: exit $rc_bad"
-grep -q "allowed: design, per-twin" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
+grep -q "allowed: per-twin, design" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
+[[ ! -e $work/new ]] || fail "a refused run left $work/new behind"
 [[ ! -s $work/log ]] || fail "a refused run ran gapflow: $(head -1 "$work/log")"
 [[ $(cat "$work/own/model_seeds") == per-twin ]] || fail "a refused run changed the record"
+
+# A pass folder from before the record (twins, no model_seeds) used the design's seed: the default
+# (per-twin) is refused there, and nothing of it changes.
+mkdir -p "$work/old/twins" && cp "$work/shared/twins/null-1.toml" "$work/old/twins/"
+echo 16000 > "$work/old/seed_offset" && echo $design > "$work/old/design"   # as pass 19's folder
+set +e
+blind "$work/old" 1 16000 $design; rc_old=$?
+set -e
+[[ $rc_old == 2 ]] || fail "a pass folder without the record resumed with a seed per twin: exit $rc_old"
+grep -q "made with MODEL_SEEDS design, not per-twin" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
+[[ $(ls "$work/old" | tr '\n' ' ') == "design seed_offset twins " ]] || fail "a refused run wrote into the old pass folder: $(ls "$work/old")"
 
 # The oracle's remaking gives each twin the model seed the pass gave it (else its twin differs).
 "$src/studies/blind_resignal.sh" "$work/own" "$work/resignal" "$work/none.sqlite" 1 rolling-low \
   > /dev/null 2> "$work/stderr" || true
-grep -q -- "--model-seed 16111" "$work/log" || fail "blind_resignal.sh did not remake rolling-low with its model seed"
+grep -q -- "--model-seed 16111000" "$work/log" || fail "blind_resignal.sh did not remake rolling-low with its model seed"
 if grep -q "differs from" "$work/stderr"; then fail "the remade twin differs: $(cat "$work/stderr")"; fi
 # A replay of the nulls toggles the signatures' setting and keeps the pass's other options.
 touch "$work/store.sqlite"
@@ -85,4 +99,11 @@ MODEL_SEEDS=design blind "$work/both" 1 16000 $design --held-out-route --indepen
 : > "$work/log"
 "$src/studies/score_lean_replay.sh" "$work/both" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2>&1 || true
 grep -q -- "--no-plots --held-out-route$" "$work/log" || fail "the replay of a pass with the option: $(cat "$work/log")"
+# A replay's OUT is not resumed with other options (here: another pass's).
+set +e
+"$src/studies/score_lean_replay.sh" "$work/own" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2> "$work/stderr"
+rc_replay=$?
+set -e
+[[ $rc_replay == 2 ]] && grep -q "was calibrated with '--held-out-route'" "$work/stderr" ||
+  fail "a replay OUT resumed with other options: exit $rc_replay, $(cat "$work/stderr")"
 echo "ok"
