@@ -51,7 +51,8 @@ planted_options() {
 # the fresh re-score, the signatures' own seeds: calibrate/calibration.hpp); the twins' seeds are
 # consecutive, so their own seeds would meet (one twin's + 7919 is another's + 7907), and twins
 # ending at the same parameters would share runs. Spaced by 1000, no two meet (no difference of
-# those offsets is a multiple of 1000), nor meet a twin's data seeds (design seed + 1000003 + seed).
+# those offsets is a multiple of 1000), nor, at the offsets used, a twin's data seeds (design seed +
+# 1000003 + seed; those are in another store, but equal seeds at equal parameters are equal runs).
 model_seed_options() {
   seed_options=()
   if [[ $1 == per-twin ]]; then seed_options=(--model-seed $(($2 * 1000))); fi
