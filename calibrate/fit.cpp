@@ -9,7 +9,15 @@
 #include <cmath>
 #include <numeric>
 
+// Boost 1.74's pchip.hpp (Debian 12) calls isnan unqualified; later Boost qualifies it.
+using std::isnan;
+#include <boost/math/interpolators/pchip.hpp>
+
 namespace gapflow {
+
+struct SmoothResponse {
+  boost::math::interpolators::pchip<std::vector<double>> at;
+};
 
 double total_sigma(const DataFile& data, const Prediction& p, std::size_t i) {
   return std::hypot(data.fit_se(i), p.se_fit[i]);
@@ -224,11 +232,20 @@ void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<d
   const auto k = static_cast<std::size_t>(std::lower_bound(offsets.begin(), offsets.end(), da) - offsets.begin());
   if (k < offsets.size() && offsets[k] == da) {
     shift[k] = std::move(shift_at), shift_se[k] = std::move(se_at);
-    return;
+  } else {
+    offsets.insert(offsets.begin() + static_cast<std::ptrdiff_t>(k), da);
+    shift.insert(shift.begin() + static_cast<std::ptrdiff_t>(k), std::move(shift_at));
+    shift_se.insert(shift_se.begin() + static_cast<std::ptrdiff_t>(k), std::move(se_at));
   }
-  offsets.insert(offsets.begin() + static_cast<std::ptrdiff_t>(k), da);
-  shift.insert(shift.begin() + static_cast<std::ptrdiff_t>(k), std::move(shift_at));
-  shift_se.insert(shift_se.begin() + static_cast<std::ptrdiff_t>(k), std::move(se_at));
+  smooth.assign(shift.front().size(), nullptr);
+  if (offsets.size() < 4) return;  // PCHIP needs four sizes
+  for (std::size_t i = 0; i < smooth.size(); ++i) {
+    std::vector<double> y;
+    for (const std::vector<double>& s : shift) y.push_back(s[i]);
+    if (std::all_of(y.begin(), y.end(), [](double v) { return std::isfinite(v); }))
+      smooth[i] = std::make_shared<const SmoothResponse>(
+          SmoothResponse{boost::math::interpolators::pchip<std::vector<double>>(std::vector<double>(offsets), std::move(y))});
+  }
 }
 
 double EffectTerm::response(std::size_t i, double da, double& variance) const {
@@ -246,6 +263,8 @@ double EffectTerm::response(std::size_t i, double da, double& variance) const {
   const double sa = shift_se[k][i], sb = shift_se[k + 1][i];
   const double correlated = (1 - w) * sa + w * sb;
   variance = std::max(correlated * correlated, (1 - w) * (1 - w) * sa * sa + w * w * sb * sb);
+  const bool inside = da >= offsets.front() && da <= offsets.back();
+  if (inside && i < smooth.size() && smooth[i]) return smooth[i]->at(da);
   return a + w * (b - a);
 }
 
@@ -337,7 +356,7 @@ ParameterSet fit_surface(const DataFile& data, const Surface& s, const Parameter
   for (const Var& v : vars) x.push_back(start.get(v.key, (v.lo + v.hi) / 2));
   ParameterSet best = minimise_from(data, s, start, vars, x);
   // A second start with the free parameters at the centre of their nodes: the surface need not
-  // be convex in them (a quadratic per point, effects piecewise linear), and from the start's
+  // be convex in them (a quadratic per point, effects interpolated through their sizes), and from the start's
   // value a local search can stay at a bound. Blind pass 10's drag-high: the first effect's fit
   // kept the friction at its upper bound 0.5 with drag 4.07 1/s, while the same surface had a
   // deviance ~69 lower at friction 0.31 and drag 4.95, found only when a second effect's fit
@@ -407,8 +426,9 @@ EffectFit fit_effect(const DataFile& data, const Surface& s, const ParameterSet&
   out.params = fit_surface(data, s, start);
   double at_fit = deviance_of(data, s.predict(out.params, data), out.params);
   ProfileScan scan = scan_profile(data, s, out.params, t);
-  // The response is piecewise linear in the effect's size, so the deviance has kinks at the
-  // measured sizes, and BOBYQA from one start can stop at one. The scan is a global search
+  // The response is interpolated through the effect's measured sizes (piecewise cubic, or linear
+  // with fewer than four), and the deviance can have kinks and local minima there (the
+  // interpolated variance has kinks at the sizes), so BOBYQA from one start can stop at one. The scan is a global search
   // over the effect's range: the fit restarts from its best point when that is lower, and the
   // profile is scanned again from there (its re-fits started from the local minimum).
   if (scan.deviance[scan.best] < at_fit) {

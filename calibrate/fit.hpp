@@ -8,7 +8,7 @@
 // optimiser had chased noise; calibrate/README.md). Instead, every point's
 // prediction (fit scale) is regressed on the free parameters over a grid of
 // nodes (a quadratic, weighted by each node's standard error), and each effect
-// adds a term, piecewise linear in its size, measured by finite differences at the nodes
+// adds a term, a shape-preserving interpolant in its size, measured by finite differences at the nodes
 // next to the fit, under common random numbers. The surface is smooth (between an
 // effect's measured sizes); NLopt's BOBYQA minimises its deviance (below), and profiles
 // are exact on it. Every fitted state
@@ -20,6 +20,7 @@
 #include <Eigen/Dense>
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -67,13 +68,23 @@ struct MeasurementRows {
 };
 MeasurementRows measurement_rows(const DataFile& data, const ParameterSet& params, const std::vector<std::string>& columns);
 
+// One point's response through an effect's measured sizes: a shape-preserving cubic (fit.cpp).
+struct SmoothResponse;
+
 // An effect term of the surface: the shift of every point's fit-scale value when
 // the effect's key moves from its neutral value, measured under common random
-// numbers at a few sizes and interpolated linearly between them (extrapolated
+// numbers at a few sizes and interpolated between them (extrapolated linearly
 // with the end segments). A candidate starts with one size (its physical step:
 // `slope` is its signature); an effect the loop adds is measured at more sizes
 // across its range, because few effects act linearly over it: a lateral tilt
-// moves where spheres leave linearly but slows the flow quadratically.
+// moves where spheres leave linearly but slows the flow quadratically (J is even
+// in the tilt: the board mirrored is the same board).
+// Between the sizes: with four or more, a shape-preserving cubic (PCHIP, Boost.Math:
+// monotone where the measured shifts are, never beyond its neighbours); with fewer,
+// a straight line. A straight line through a curved response is biased toward
+// neutral: the tilt's quadratic J through 0, 2, 4, 6 deg reads 4.48 deg where 4.56
+// was planted, which blind passes 15-18 fitted (4.478 for 4.559 in pass 18's
+// tilt-high; 6 of 8 tilt intervals missed, all toward neutral).
 struct EffectTerm {
   std::string effect, key;
   double neutral = 0;             // the template's value (the term is 0 there)
@@ -82,17 +93,20 @@ struct EffectTerm {
   std::vector<double> slope_se;   // per point (paired replicate differences)
   std::vector<double> offsets;    // sizes measured, key - neutral, ascending, 0 included
   std::vector<std::vector<double>> shift, shift_se;  // [size][point], fit scale (0 at offset 0)
+  std::vector<std::shared_ptr<const SmoothResponse>> smooth;  // [point] (4+ sizes, finite shifts; else null:
+                                                              // a straight line), made by add_size
 
   // A term measured at one step: shift = slope * step.
   static EffectTerm single_step(std::string effect, std::string key, double neutral, double lo, double hi, double step,
                                 std::vector<double> slope, std::vector<double> slope_se);
-  // Add the shifts measured at offset `da` (kept sorted).
+  // Add the shifts measured at offset `da` (kept sorted); the interpolants are made anew.
   void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at);
-  // Shift at point i for an offset da, and its variance.
+  // Shift at point i for an offset da, and its variance (the neighbouring sizes' standard errors
+  // interpolated linearly: a bound whatever their correlation).
   double response(std::size_t i, double da, double& variance) const;
 };
 
-// The model near the fit: quadratic in the free parameters, piecewise linear in each effect's size, additive.
+// The model near the fit: quadratic in the free parameters, interpolated in each effect's size (EffectTerm), additive.
 struct Surface {
   std::vector<std::string> keys;      // free parameters
   std::vector<double> centre, half;   // x' = (x - centre)/half in [-1, 1] over the nodes

@@ -111,10 +111,9 @@ TEST(ObserveCrossings, ArrivalOffsetAndSpreadFromKnownCrossings) {
 }
 
 TEST(EffectTermResponse, InterpolatesMeasuredSizesAndExtendsTheEndSegments) {
-  // Point 0: shift 2 at offset 2 (slope 1), then measured 3 at 4 and -2 at -1.
+  // Point 0: shift 2 at offset 2 (slope 1), then measured 3 at 4: three sizes, a straight line between.
   EffectTerm t = EffectTerm::single_step("e", "k", 0.0, -1.0, 6.0, 2.0, {1.0}, {0.1});
   t.add_size(4.0, {3.0}, {0.2});
-  t.add_size(-1.0, {-2.0}, {0.3});
   double var = -1;
   EXPECT_NEAR(t.response(0, 0.0, var), 0.0, 1e-12);
   EXPECT_NEAR(var, 0.0, 1e-12);  // neutral: no shift, no uncertainty
@@ -124,9 +123,40 @@ TEST(EffectTermResponse, InterpolatesMeasuredSizesAndExtendsTheEndSegments) {
   EXPECT_NEAR(var, std::pow(0.2, 2), 1e-12);          // between sizes of equal se: no dip (independent: half)
   EXPECT_NEAR(t.response(0, 6.0, var), 4.0, 1e-12);    // beyond the last size: slope of 2 -> 4
   EXPECT_NEAR(var, 0.04 + 4 * 0.04, 1e-12);            // extrapolated: (1-w)^2 va + w^2 vb at w = 2
-  EXPECT_NEAR(t.response(0, -0.5, var), -1.0, 1e-12);
-  EXPECT_NEAR(t.response(0, -2.0, var), -4.0, 1e-12);  // below the first: slope of -1 -> 0
+  EXPECT_NEAR(t.response(0, -2.0, var), -2.0, 1e-12);  // below the first: the first segment's slope 1
   EXPECT_NEAR(t.slope[0], 1.0, 1e-12);                 // the signature stays the first step's
+}
+
+TEST(EffectTermResponse, FourSizesOfACurvedResponseAreInterpolatedWithoutTheStraightLinesBias) {
+  // The tilt's J is even in the tilt (the board mirrored is the same board): a quadratic a t^2
+  // near neutral, measured at 0, 2, 4, 6 deg as the loop measures a tilt (half step, step, end).
+  // A straight line between 4 and 6 reads 4.48 deg where 4.559 was planted (blind pass 18's
+  // tilt-high fitted 4.478): for these sizes 0.08-0.16 deg toward neutral. The shape-preserving
+  // cubic must come within 0.05 deg (it gives 2.558, 3.381, 4.551, 5.331).
+  const double a = -0.01;  // fit-scale shift per deg^2
+  EffectTerm t = EffectTerm::single_step("lateral_tilt", "plane.lateral_tilt_deg", 0.0, 0.0, 6.0, 4.0, {a * 4}, {0.001});
+  t.add_size(2.0, {a * 4}, {0.001});
+  t.add_size(6.0, {a * 36}, {0.001});
+  double var = 0;
+  const auto size_for = [&](double target) {  // the size whose interpolated shift is target (bisection)
+    double lo = 0, hi = 6;
+    for (int k = 0; k < 60; ++k) ((t.response(0, (lo + hi) / 2, var) > target) ? lo : hi) = (lo + hi) / 2;
+    return lo;
+  };
+  for (double planted : {2.512, 3.383, 4.559, 5.379}) EXPECT_NEAR(size_for(a * planted * planted), planted, 0.05);
+  // At the measured sizes the interpolant is the measurement; beyond them, the end segment's line.
+  EXPECT_NEAR(t.response(0, 4.0, var), a * 16, 1e-12);
+  EXPECT_NEAR(t.response(0, 8.0, var), a * 36 + (a * 36 - a * 16), 1e-12);
+  // Never beyond its neighbours where the shifts turn (noisy sizes): within [min, max] of the two.
+  EffectTerm wiggly = EffectTerm::single_step("e", "k", 0.0, -2.0, 6.0, 2.0, {0.5}, {0.1});  // 1 at 2
+  wiggly.add_size(-2.0, {-1.0}, {0.1});
+  wiggly.add_size(4.0, {0.2}, {0.1});
+  wiggly.add_size(6.0, {1.5}, {0.1});
+  for (double da = 2.0; da <= 4.0; da += 0.05) {
+    const double v = wiggly.response(0, da, var);
+    EXPECT_LE(v, 1.0 + 1e-12);
+    EXPECT_GE(v, 0.2 - 1e-12);
+  }
 }
 
 // kFourPoints with an evaluator on a store of its own, 2 workers (members in that order:
