@@ -19,6 +19,27 @@ struct SmoothResponse {
   boost::math::interpolators::pchip<std::vector<double>> at;
 };
 
+namespace {
+
+// The slope of a PCHIP at an end (x[0], or x[n-1] with `last`): the three-point formula (the
+// derivative there of the parabola through the three end sizes), kept shape-preserving (0 where it
+// points against the end segment; at most 3 times the end segment's slope where the segments turn),
+// as Fritsch and Carlson's and MATLAB's pchip do. Boost 1.74's default is the end segment's own
+// slope, which on a response even in its effect (a tilt's J: slope 0 at neutral) reads a quadratic's
+// 1 deg as 0.56, as biased toward neutral as a straight line.
+double end_slope(const std::vector<double>& x, const std::vector<double>& y, bool last) {
+  const std::size_t n = x.size();
+  const std::size_t a = last ? n - 1 : 0, b = last ? n - 2 : 1, c = last ? n - 3 : 2;
+  const double h0 = x[b] - x[a], h1 = x[c] - x[b];  // signed: negative from the last end
+  const double d0 = (y[b] - y[a]) / h0, d1 = (y[c] - y[b]) / h1;
+  const double d = ((2 * h0 + h1) * d0 - h0 * d1) / (h0 + h1);
+  if (d * d0 <= 0) return 0.0;
+  if (d0 * d1 < 0 && std::abs(d) > 3 * std::abs(d0)) return 3 * d0;
+  return d;
+}
+
+}  // namespace
+
 double total_sigma(const DataFile& data, const Prediction& p, std::size_t i) {
   return std::hypot(data.fit_se(i), p.se_fit[i]);
 }
@@ -242,9 +263,10 @@ void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<d
   for (std::size_t i = 0; i < smooth.size(); ++i) {
     std::vector<double> y;
     for (const std::vector<double>& s : shift) y.push_back(s[i]);
-    if (std::all_of(y.begin(), y.end(), [](double v) { return std::isfinite(v); }))
-      smooth[i] = std::make_shared<const SmoothResponse>(
-          SmoothResponse{boost::math::interpolators::pchip<std::vector<double>>(std::vector<double>(offsets), std::move(y))});
+    if (!std::all_of(y.begin(), y.end(), [](double v) { return std::isfinite(v); })) continue;
+    const double left = end_slope(offsets, y, false), right = end_slope(offsets, y, true);
+    smooth[i] = std::make_shared<const SmoothResponse>(SmoothResponse{
+        boost::math::interpolators::pchip<std::vector<double>>(std::vector<double>(offsets), std::move(y), left, right)});
   }
 }
 

@@ -80,8 +80,8 @@ struct SmoothResponse;
 // moves where spheres leave linearly but slows the flow quadratically (J is even
 // in the tilt: the board mirrored is the same board).
 // Between the sizes: with four or more, a shape-preserving cubic (PCHIP, Boost.Math:
-// monotone where the measured shifts are, never beyond its neighbours); with fewer,
-// a straight line. A straight line through a curved response is biased toward
+// monotone where the measured shifts are, never beyond its neighbours; its end slopes from the
+// three end sizes, fit.cpp end_slope); with fewer, a straight line. A straight line through a curved response is biased toward
 // neutral: the tilt's quadratic J through 0, 2, 4, 6 deg reads 4.48 deg where 4.56
 // was planted, which blind passes 15-18 fitted (4.478 for 4.559 in pass 18's
 // tilt-high; 6 of 8 tilt intervals missed, all toward neutral).
@@ -101,8 +101,11 @@ struct EffectTerm {
                                 std::vector<double> slope, std::vector<double> slope_se);
   // Add the shifts measured at offset `da` (kept sorted); the interpolants are made anew.
   void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at);
-  // Shift at point i for an offset da, and its variance (the neighbouring sizes' standard errors
-  // interpolated linearly: a bound whatever their correlation).
+  // Shift at point i for an offset da, and its variance: the two neighbouring sizes' standard
+  // errors interpolated linearly, a bound for a straight line whatever their correlation. The
+  // cubic also leans on the next sizes (at 3 deg between tilt sizes 2, 4, 6 its weights are about
+  // 0.72, 0.45, -0.04), so with fully correlated errors its standard error can exceed this by
+  // about 15-20 %; the response's share of a point's total error is mostly small.
   double response(std::size_t i, double da, double& variance) const;
 };
 

@@ -131,8 +131,10 @@ TEST(EffectTermResponse, FourSizesOfACurvedResponseAreInterpolatedWithoutTheStra
   // The tilt's J is even in the tilt (the board mirrored is the same board): a quadratic a t^2
   // near neutral, measured at 0, 2, 4, 6 deg as the loop measures a tilt (half step, step, end).
   // A straight line between 4 and 6 reads 4.48 deg where 4.559 was planted (blind pass 18's
-  // tilt-high fitted 4.478): for these sizes 0.08-0.16 deg toward neutral. The shape-preserving
-  // cubic must come within 0.05 deg (it gives 2.558, 3.381, 4.551, 5.331).
+  // tilt-high fitted 4.478): 0.08-0.14 deg toward neutral from 2.5 deg up, 0.375-0.5 below 2. The
+  // shape-preserving cubic, its end slopes from the three end sizes (0 at neutral here), must come
+  // within 0.05 deg from 2.5 deg up (it gives 2.558, 3.381, 4.575, 5.385) and 0.12 below (0.423,
+  // 0.884, 1.399; with Boost's default end slopes, the end segments' own, 0.129, 0.556, 1.272).
   const double a = -0.01;  // fit-scale shift per deg^2
   EffectTerm t = EffectTerm::single_step("lateral_tilt", "plane.lateral_tilt_deg", 0.0, 0.0, 6.0, 4.0, {a * 4}, {0.001});
   t.add_size(2.0, {a * 4}, {0.001});
@@ -144,10 +146,12 @@ TEST(EffectTermResponse, FourSizesOfACurvedResponseAreInterpolatedWithoutTheStra
     return lo;
   };
   for (double planted : {2.512, 3.383, 4.559, 5.379}) EXPECT_NEAR(size_for(a * planted * planted), planted, 0.05);
+  for (double planted : {0.5, 1.0, 1.5}) EXPECT_NEAR(size_for(a * planted * planted), planted, 0.12);
   // At the measured sizes the interpolant is the measurement; beyond them, the end segment's line.
   EXPECT_NEAR(t.response(0, 4.0, var), a * 16, 1e-12);
   EXPECT_NEAR(t.response(0, 8.0, var), a * 36 + (a * 36 - a * 16), 1e-12);
   // Never beyond its neighbours where the shifts turn (noisy sizes): within [min, max] of the two.
+  // (A straight line passes this too; a cubic spline that is not shape-preserving does not.)
   EffectTerm wiggly = EffectTerm::single_step("e", "k", 0.0, -2.0, 6.0, 2.0, {0.5}, {0.1});  // 1 at 2
   wiggly.add_size(-2.0, {-1.0}, {0.1});
   wiggly.add_size(4.0, {0.2}, {0.1});
@@ -157,6 +161,8 @@ TEST(EffectTermResponse, FourSizesOfACurvedResponseAreInterpolatedWithoutTheStra
     EXPECT_LE(v, 1.0 + 1e-12);
     EXPECT_GE(v, 0.2 - 1e-12);
   }
+  // Below the first size: the first segment's line (slope 0.5 from -2 to 0).
+  EXPECT_NEAR(wiggly.response(0, -3.0, var), -1.5, 1e-12);
 }
 
 // kFourPoints with an evaluator on a store of its own, 2 workers (members in that order:

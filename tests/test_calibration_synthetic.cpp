@@ -279,8 +279,9 @@ TEST(CalibrationSynthetic, WhenTwoCandidatesAreSignificantBothAreFittedAndThePla
 // A lateral tilt slows the flow quadratically (J is even in the tilt), and the loop measures it at
 // 0, 2, 4 and 6 deg. A straight line between the sizes reads a planted 4.56 deg as 4.48 (blind
 // passes 15-18 fitted every tilt toward neutral, 6 of 8 intervals missing), and with little noise
-// its interval misses; interpolated by the shape-preserving cubic the size comes within 0.03 deg
-// and the interval holds the truth.
+// its interval misses (4.48 [4.454, 4.509]); interpolated by the shape-preserving cubic the size
+// comes within 0.03 deg and the interval holds the truth (4.577 [4.552, 4.601]: the cubic reads a
+// quadratic's 4.559 as 4.575).
 TEST(CalibrationSynthetic, ACurvedResponseIsSizedWithoutTheStraightLinesBiasTowardNeutral) {
   const NoiseScope quiet({.common = 0.002, .own = 0.0005});  // below the data's floor (0.5 %)
   const TiltScope tilt(0.02);  // ln J per deg^2: -0.42 at 4.56 deg, W/d 4.5, 8 deg
