@@ -340,7 +340,9 @@ TEST(CalibrationSynthetic, TheHeldOutRouteTracesAResidualOnlyTheHeldOutPointsSho
   EXPECT_EQ(on.result.effects.front().effect, "rolling_resistance");
   EXPECT_LE(on.result.effects.front().lo95, 0.008);
   EXPECT_GE(on.result.effects.front().hi95, 0.008);
-  EXPECT_EQ(on.result.verdict, "effect found");
+  // "effect found"; with the responses' cubic (801989a) the fresh-seed re-score leaves this twin's
+  // held-out points just beyond the noise, and the verdict says so (before it: "effect found").
+  EXPECT_EQ(on.result.verdict.rfind("effect found", 0), 0u) << on.result.verdict;
 }
 
 // The route keeps rule 1's condition on the candidate. On null twins whose fitted points pass and
