@@ -2,6 +2,10 @@
 # and studies/blind_resignal.sh (which makes them again). Sourced, not run.
 
 # id  model  seed  planted (effect:NAME:SIZE | set:KEY=VALUE), space-separated
+# outside-quadratic-16 was added for pass 20: on design v2 the quadratic drags of 2 and 4 /m were
+# invisible to the oracle in nearly every pass (lambda 0-16, power 0.01-0.87), so the out-of-catalogue
+# criterion went untested. 16 /m (terminal speed on the 8 deg board sqrt(g sin 8 / 16) = 0.29 m/s,
+# as a linear drag of 4.7 /s gives) had lambda 140 in a scratch twin at seed 99141 (not a pass's).
 blind_cases="
 null-1              2d 101
 null-2              2d 102
@@ -29,6 +33,7 @@ two-drag-gap        2d 131 effect:linear_drag:high effect:gap_offset:high
 two-tilt-rolling    2d 132 effect:lateral_tilt:high effect:rolling_resistance:high
 outside-quadratic-2 2d 141 set:particles.quadratic_drag_per_m=2
 outside-quadratic-4 2d 142 set:particles.quadratic_drag_per_m=4
+outside-quadratic-16 2d 143 set:particles.quadratic_drag_per_m=16
 twin-3d             3d 151
 "
 
