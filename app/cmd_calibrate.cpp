@@ -168,9 +168,10 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
   o.calibrate->add_flag("--held-out-route", o.held_out_route,
                         "Also look for an effect where the fitted points are within the noise but the held-out points "
                         "are not (default off; rule 1 of calibrate/decisions.hpp)");
-  o.calibrate->add_flag("--independent-signatures", o.independent_signatures,
-                        "Measure the effects' signatures on seeds of their own, not the baseline nodes' (default off; "
-                        "calibrate/effect_responses.hpp)");
+  o.calibrate->add_flag("--independent-signatures,!--shared-signatures", o.independent_signatures,
+                        "Measure the effects' signatures on seeds of their own (the default), or pair their moved runs "
+                        "with the baseline nodes' runs, which the residual shares, so every score leans toward its step "
+                        "(--shared-signatures: every blind pass up to 18; calibrate/effect_responses.hpp)");
   o.calibrate->add_option("--model-replicates", o.model_replicates,
                           "Model runs per point and parameter value, in place of the data file's [model] replicates "
                           "(more: less model noise in every test, more runs)")

@@ -55,8 +55,9 @@ struct CalibrationDef {
                                    // within the noise (decisions.hpp, rule 1's option; 0: never)
   bool held_out_route = false;     // a round also looks for an effect where the fitted points are within the noise but
                                    // the held-out points are not (decisions.hpp, rule 1's second option)
-  bool independent_signatures = false;  // the signatures' moved and unmoved runs on seeds of their own, not the
-                                   // baseline nodes' (effect_responses.hpp: why the score then has no bias)
+  bool independent_signatures = true;  // the signatures' moved and unmoved runs on seeds of their own, not the
+                                   // baseline nodes' (effect_responses.hpp: why the score then has no bias;
+                                   // the default from blind pass 19's pre-registered decision)
   std::uint64_t signature_seed_offset = 7933;  // run.seed offset of those runs
   int grid_max = 9;                // grid nodes of a one-parameter baseline fit
   int fit_evaluations = 12;        // BOBYQA evaluations per fit (each = every point x replicates)

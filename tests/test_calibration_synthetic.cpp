@@ -164,7 +164,7 @@ struct SyntheticCase {
   std::uint64_t model_seed = 1;
   bool shallow_held_out = false;  // write_design's
   bool held_out_route = false;    // CalibrationDef's
-  bool independent_signatures = false;  // CalibrationDef's
+  bool independent_signatures = CalibrationDef{}.independent_signatures;
 };
 
 // A twin of the design with `effects` planted (and the case's friction and seeds), calibrated blind.
