@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Twins of a finished blind pass (default its nulls) calibrated again with the other setting of
-# --independent-signatures than the pass's (the pass's other calibrate options kept), on a copy of the
+# Twins of a finished blind pass (default its nulls) calibrated again with the other setting of the
+# signatures' seeds than the pass's (own seeds or shared with the baseline; the pass's other calibrate
+# options kept), on a copy of the
 # pass's store: the same twins and seeds, so the baseline and its runs are the pass's, and only the
 # signatures' runs differ. Not blind: a check on the simulator of whether the first round's scores
 # lean toward the effects' steps because the signatures shared the baseline nodes' runs (README,
@@ -25,15 +26,25 @@ gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 if [[ ${#cases[@]} -eq 0 ]]; then
   for twin in "$pass"/twins/null-*.toml; do cases+=("$(basename "$twin" .toml)"); done
 fi
-# The pass's options (a pass without the record ran with none), the signatures' setting toggled.
+# The pass's options (a pass without the record ran with none), its signatures' setting toggled. The
+# setting is what its calibrations record (summary.json "independent_signatures"; absent before the
+# option existed: shared), since a pass without either flag ran its binary's default (shared up to
+# pass 19's binaries, on seeds of their own after). Shared again: --shared-signatures where GAPFLOW
+# knows it, else no flag (a binary from before it, whose default is shared).
 options=()
 if [[ -f $pass/calibrate_options ]]; then read -r -a options < "$pass/calibrate_options" || true; fi
 replay_options=()
-for o in "${options[@]}"; do [[ $o == --independent-signatures ]] || replay_options+=("$o"); done
-if [[ ${#replay_options[@]} -eq ${#options[@]} ]]; then
-  replay_options+=(--independent-signatures); label="with --independent-signatures"
+for o in "${options[@]}"; do
+  [[ $o == --independent-signatures || $o == --shared-signatures ]] || replay_options+=("$o")
+done
+first_summary=$(compgen -G "$pass/null-*/summary.json" | head -1 || true)
+[[ -n $first_summary ]] || { echo "error: no calibrated null in $pass" >&2; exit 2; }
+if grep -q '"independent_signatures": true' "$first_summary"; then
+  label="with the signatures shared (the pass's own seeds for them toggled off)"
+  if "$gapflow" calibrate --help 2>/dev/null | grep -q -- '--shared-signatures'; then replay_options+=(--shared-signatures); fi
 else
-  label="without --independent-signatures"
+  label="with --independent-signatures"
+  replay_options+=(--independent-signatures)
 fi
 # An OUT is calibrated with one set of options only (recorded in it; an OUT without the record was
 # made by the script before pass 20, with --independent-signatures alone).

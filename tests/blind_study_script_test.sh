@@ -16,8 +16,11 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 # and a truth with nothing planted; `calibrate` writes a summary that found nothing.
 cat > "$work/gapflow" <<'STUB'
 #!/usr/bin/env bash
+[[ $* == *--help* ]] && { echo "  --independent-signatures,--shared-signatures{false}"; exit 0; }
 echo "$*" >> "$STUB_LOG"
 command=$1; shift
+own_seeds=false
+[[ $* == *--independent-signatures* ]] && own_seeds=true
 out="" truth="" model_seed=1
 while [[ $# -gt 0 ]]; do
   case $1 in
@@ -34,8 +37,8 @@ else
   mkdir -p "$out"
   : > "$out/report.md"
   errors='{"n": 12, "rmse": 0.1, "rms_whitened": 1.0, "chi2": 12.0, "dof": 12, "p": 0.5, "invalid": 0}'
-  printf '{"effects": [], "verdict": "consistent with noise", "poor_fit": false, "held_out_beyond_noise": false, "before": {"fitted": %s, "held_out_fresh": %s}, "after": {"params": {"k": 0.3}, "fitted": %s, "held_out_fresh": %s}, "measured_free": [], "rounds": [], "runs_simulated": 10, "runs_reused": 0, "run_seconds": 1.0, "wall_seconds": 1.0}\n' \
-    "$errors" "$errors" "$errors" "$errors" > "$out/summary.json"
+  printf '{"effects": [], "verdict": "consistent with noise", "poor_fit": false, "held_out_beyond_noise": false, "before": {"fitted": %s, "held_out_fresh": %s}, "after": {"params": {"k": 0.3}, "fitted": %s, "held_out_fresh": %s}, "measured_free": [], "rounds": [], "independent_signatures": %s, "runs_simulated": 10, "runs_reused": 0, "run_seconds": 1.0, "wall_seconds": 1.0}\n' \
+    "$errors" "$errors" "$errors" "$errors" "$own_seeds" > "$out/summary.json"
 fi
 STUB
 chmod +x "$work/gapflow"
@@ -98,12 +101,12 @@ grep -q -- "--no-plots --independent-signatures$" "$work/log" || fail "the repla
 MODEL_SEEDS=design blind "$work/both" 1 16000 $design --held-out-route --independent-signatures || fail "pass with options: $(cat "$work/stderr")"
 : > "$work/log"
 "$src/studies/score_lean_replay.sh" "$work/both" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2>&1 || true
-grep -q -- "--no-plots --held-out-route$" "$work/log" || fail "the replay of a pass with the option: $(cat "$work/log")"
+grep -q -- "--no-plots --held-out-route --shared-signatures$" "$work/log" || fail "the replay of a pass with the option: $(cat "$work/log")"
 # A replay's OUT is not resumed with other options (here: another pass's).
 set +e
 "$src/studies/score_lean_replay.sh" "$work/own" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2> "$work/stderr"
 rc_replay=$?
 set -e
-[[ $rc_replay == 2 ]] && grep -q "was calibrated with '--held-out-route'" "$work/stderr" ||
+[[ $rc_replay == 2 ]] && grep -q "was calibrated with '--held-out-route --shared-signatures'" "$work/stderr" ||
   fail "a replay OUT resumed with other options: exit $rc_replay, $(cat "$work/stderr")"
 echo "ok"
