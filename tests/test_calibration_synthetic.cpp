@@ -53,28 +53,25 @@ struct NoiseLevels {
 };
 NoiseLevels g_noise;  // a test may change it (NoiseScope)
 
-// Sets the closed-form model's noise for one test and restores it after.
-class NoiseScope {
+// Sets one of the closed-form model's settings (g_noise, g_tilt_curvature) for one test and
+// restores it after.
+template <class T>
+class SettingScope {
  public:
-  explicit NoiseScope(NoiseLevels levels) : saved_(g_noise) { g_noise = levels; }
-  ~NoiseScope() { g_noise = saved_; }
-  NoiseScope(const NoiseScope&) = delete;
-  NoiseScope& operator=(const NoiseScope&) = delete;
+  SettingScope(T& setting, T value) : setting_(setting), saved_(setting) { setting_ = value; }
+  ~SettingScope() { setting_ = saved_; }
+  SettingScope(const SettingScope&) = delete;
+  SettingScope& operator=(const SettingScope&) = delete;
 
  private:
-  NoiseLevels saved_;
+  T& setting_;
+  T saved_;
 };
-
-// Sets the tilt's curvature for one test and restores it after.
-class TiltScope {
- public:
-  explicit TiltScope(double curvature) : saved_(g_tilt_curvature) { g_tilt_curvature = curvature; }
-  ~TiltScope() { g_tilt_curvature = saved_; }
-  TiltScope(const TiltScope&) = delete;
-  TiltScope& operator=(const TiltScope&) = delete;
-
- private:
-  double saved_;
+struct NoiseScope : SettingScope<NoiseLevels> {
+  explicit NoiseScope(NoiseLevels levels) : SettingScope(g_noise, levels) {}
+};
+struct TiltScope : SettingScope<double> {
+  explicit TiltScope(double curvature) : SettingScope(g_tilt_curvature, curvature) {}
 };
 
 double own_noise_scale(const ScenarioDef& d) {
