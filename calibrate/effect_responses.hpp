@@ -28,15 +28,16 @@
 // A later round's term has the step and the refinement sizes, not the range's-end
 // look a weak signature got in the first round.
 //
-// Shared noise (CalibrationDef::independent_signatures, off by default). The score test
+// Shared noise (CalibrationDef::independent_signatures: on by default from blind pass 19's
+// decision; --shared-signatures pairs with the baseline's runs, as every pass up to 18). The score test
 // (attribution.hpp) projects the residual r = data - surface on a signature g, the moved runs
 // less the unmoved runs at the nearest nodes. On the baseline's seeds, those unmoved runs are
 // the very runs the surface was fitted through: r carries minus their noise, and so does g,
 // where the moved runs do not repeat it (a simulator's trajectories part within a few
 // collisions, so common random numbers cancel little of it). Then E[g.r] > 0 on a correct
 // model: every score leans toward its step, most for the weak signatures, and the test rejects
-// too often. With the option the signatures' moved and unmoved runs are made on seeds of their
-// own; the refinement sizes of an effect about to be fitted stay paired with the nodes' runs
+// too often. On seeds of their own (the default) the signatures' moved and unmoved runs are made
+// there; the refinement sizes of an effect about to be fitted stay paired with the nodes' runs
 // on the baseline's seeds (each size is paired within itself, so the term may mix the two).
 #pragma once
 

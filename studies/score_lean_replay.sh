@@ -29,7 +29,7 @@ fi
 # The pass's options (a pass without the record ran with none), its signatures' setting toggled. The
 # setting is what its calibrations record (summary.json "independent_signatures"; absent before the
 # option existed: shared), since a pass without either flag ran its binary's default (shared up to
-# pass 19's binaries, on seeds of their own after). Shared again: --shared-signatures where GAPFLOW
+# pass 20's binary, a build of 13aa5bd; on seeds of their own from bf54828). Shared again: --shared-signatures where GAPFLOW
 # knows it, else no flag (a binary from before it, whose default is shared).
 options=()
 if [[ -f $pass/calibrate_options ]]; then read -r -a options < "$pass/calibrate_options" || true; fi

@@ -16,11 +16,17 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 # and a truth with nothing planted; `calibrate` writes a summary that found nothing.
 cat > "$work/gapflow" <<'STUB'
 #!/usr/bin/env bash
-[[ $* == *--help* ]] && { echo "  --independent-signatures,--shared-signatures{false}"; exit 0; }
+# STUB_BINARY: new (knows --shared-signatures; default own seeds) or old (neither; default shared).
+if [[ $* == *--help* ]]; then
+  [[ ${STUB_BINARY:-new} == new ]] && echo "  --independent-signatures,--shared-signatures{false}"
+  exit 0
+fi
 echo "$*" >> "$STUB_LOG"
 command=$1; shift
 own_seeds=false
+[[ ${STUB_BINARY:-new} == new ]] && own_seeds=true
 [[ $* == *--independent-signatures* ]] && own_seeds=true
+[[ $* == *--shared-signatures* ]] && own_seeds=false
 out="" truth="" model_seed=1
 while [[ $# -gt 0 ]]; do
   case $1 in
@@ -93,15 +99,29 @@ grep -q "made with MODEL_SEEDS design, not per-twin" "$work/stderr" || fail "no 
   > /dev/null 2> "$work/stderr" || true
 grep -q -- "--model-seed 16111000" "$work/log" || fail "blind_resignal.sh did not remake rolling-low with its model seed"
 if grep -q "differs from" "$work/stderr"; then fail "the remade twin differs: $(cat "$work/stderr")"; fi
-# A replay of the nulls toggles the signatures' setting and keeps the pass's other options.
+# A replay of the nulls toggles the signatures' setting, read from the pass's calibrations (a pass
+# without either flag ran its binary's default), and keeps the pass's other options. The passes above
+# ran on the new stand-in (own seeds by default): replayed shared.
 touch "$work/store.sqlite"
 : > "$work/log"
 "$src/studies/score_lean_replay.sh" "$work/own" "$work/store.sqlite" "$work/lean-own" 1 null-2 > /dev/null 2>&1 || true
-grep -q -- "--no-plots --independent-signatures$" "$work/log" || fail "the replay of a pass without the option: $(cat "$work/log")"
+grep -q -- "--no-plots --shared-signatures$" "$work/log" || fail "the replay of a pass on own seeds by default: $(cat "$work/log")"
+# A pass by an old binary (shared by default, no flag) is replayed with --independent-signatures.
+STUB_BINARY=old MODEL_SEEDS=design blind "$work/old-binary" 1 16000 $design || fail "old-binary pass: $(cat "$work/stderr")"
+: > "$work/log"
+STUB_BINARY=old "$src/studies/score_lean_replay.sh" "$work/old-binary" "$work/store.sqlite" "$work/lean-old" 1 null-2 \
+  > /dev/null 2>&1 || true
+grep -q -- "--no-plots --independent-signatures$" "$work/log" || fail "the replay of an old binary's pass: $(cat "$work/log")"
 MODEL_SEEDS=design blind "$work/both" 1 16000 $design --held-out-route --independent-signatures || fail "pass with options: $(cat "$work/stderr")"
 : > "$work/log"
 "$src/studies/score_lean_replay.sh" "$work/both" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2>&1 || true
 grep -q -- "--no-plots --held-out-route --shared-signatures$" "$work/log" || fail "the replay of a pass with the option: $(cat "$work/log")"
+# A pass on own seeds replayed by an old binary (as pass 20's replay by its own binary): no flag,
+# its default being shared.
+: > "$work/log"
+STUB_BINARY=old "$src/studies/score_lean_replay.sh" "$work/both" "$work/store.sqlite" "$work/lean-both-old" 1 null-2 \
+  > /dev/null 2>&1 || true
+grep -q -- "--no-plots --held-out-route$" "$work/log" || fail "an old binary's replay of an own-seeds pass: $(cat "$work/log")"
 # A replay's OUT is not resumed with other options (here: another pass's).
 set +e
 "$src/studies/score_lean_replay.sh" "$work/own" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2> "$work/stderr"
