@@ -4,7 +4,8 @@
 # design: none, so the design's), that an OUT made with one setting (or before the record, as
 # pass 19's) refuses the other before writing anything (exit 2), that a
 # resume makes and calibrates nothing again, that the summary says which draw the pass fits, and
-# that studies/score_lean_replay.sh replays with the other setting of --independent-signatures.
+# that studies/score_lean_replay.sh replays with the other setting of --independent-signatures, and
+# that studies/blind_pass_copy.sh copies a finished pass (and only a finished one) without its stores.
 #   tests/blind_study_script_test.sh
 set -euo pipefail
 src=$(cd "$(dirname "$0")/.." && pwd)
@@ -129,4 +130,22 @@ rc_replay=$?
 set -e
 [[ $rc_replay == 2 ]] && grep -q "was calibrated with '--held-out-route --shared-signatures'" "$work/stderr" ||
   fail "a replay OUT resumed with other options: exit $rc_replay, $(cat "$work/stderr")"
+# A finished pass copied into the repository's results: no stores, the twins naming the same
+# scenario file from their new place; an unfinished pass, or a destination holding one, refused.
+touch "$work/own/runs.sqlite"
+"$src/studies/blind_pass_copy.sh" "$work/own" "$work/results/pass" > /dev/null 2> "$work/stderr" ||
+  fail "copying a finished pass: $(cat "$work/stderr")"
+[[ -z $(find "$work/results/pass" -name '*.sqlite*') ]] || fail "a store was copied"
+[[ -f $work/results/pass/report.md && -f $work/results/pass/lean.txt ]] || fail "no summary or lean in the copy"
+copied=$(sed -n 's/^scenario = "\(.*\)"$/\1/p' "$work/results/pass/twins/null-2.toml")
+[[ $(realpath -m "$work/results/pass/twins/$copied") == $(realpath -m "$work/own/twins/x.toml") ]] ||
+  fail "the copied twin names another scenario: $copied"
+set +e
+"$src/studies/blind_pass_copy.sh" "$work/own" "$work/results/pass" > /dev/null 2>&1; rc_again=$?
+rm "$work/shared/null-3/summary.json"
+"$src/studies/blind_pass_copy.sh" "$work/shared" "$work/results/unfinished" > /dev/null 2> "$work/stderr"; rc_unfinished=$?
+set -e
+[[ $rc_again == 2 ]] || fail "copied over a pass: exit $rc_again"
+[[ $rc_unfinished == 2 && ! -e $work/results/unfinished ]] || fail "an unfinished pass was copied: exit $rc_unfinished"
+grep -q "null-3 has no summary.json" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
 echo "ok"
