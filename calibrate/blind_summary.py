@@ -84,6 +84,7 @@ NOT_SINGLE = ("none", "two effects", "outside the catalogue", "3D model")
 def main(out):
     out = Path(out)
     rows = []
+    own_signatures = 0  # calibrations whose signatures ran on seeds of their own (summary.json; absent: shared)
     for truth_file in sorted((out / "truth").glob("*.json")):
         case = truth_file.stem
         summary_file = out / case / "summary.json"
@@ -91,6 +92,7 @@ def main(out):
             continue
         truth = json.load(open(truth_file))
         summary = json.load(open(summary_file))
+        own_signatures += summary.get("independent_signatures", False) is True
         label, planted = truth_label(truth)
         verdict, added = said(summary)
         found = []
@@ -171,6 +173,12 @@ def main(out):
     seeds_text = ("every twin its own model seed (1000 x its seed), so the twins are independent draws of the model's noise"
                   if model_seeds == "per-twin" else
                   "every twin the design's model seed, so every calibration fits one draw of the model's noise")
+    if own_signatures == len(rows):
+        seeds_text += "; the signatures on seeds of their own"
+    elif own_signatures == 0:
+        seeds_text += "; the signatures sharing the baseline's runs"
+    else:
+        seeds_text += f"; the signatures on seeds of their own in {own_signatures} of {len(rows)} calibrations"
     single = [r for r in rows if r["truth"] not in NOT_SINGLE]
     nulls = [r for r in rows if r["truth"] == "none"]
     outside = [r for r in rows if r["truth"] == "outside the catalogue"]

@@ -62,6 +62,7 @@ while read -r id model seed planted; do
 done <<< "$blind_cases"
 [[ $(grep -c '^calibrate ' "$work/log") == "$cases" ]] || fail "not $cases calibrations"
 grep -q "every twin its own model seed" "$work/own/report.md" || fail "the summary does not say the seeds are per twin"
+grep -q "the signatures on seeds of their own" "$work/own/report.md" || fail "the summary does not say the signatures' seeds"
 
 MODEL_SEEDS=design blind "$work/shared" 1 16000 $design || fail "design-seed pass: $(cat "$work/stderr")"
 if grep -q -- "--model-seed" <(grep "shared/twins" "$work/log"); then fail "MODEL_SEEDS=design gave a model seed"; fi
