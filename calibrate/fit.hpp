@@ -104,8 +104,9 @@ struct EffectTerm {
   // Shift at point i for an offset da, and its variance: the two neighbouring sizes' standard
   // errors interpolated linearly, a bound for a straight line whatever their correlation. The
   // cubic also leans on the next sizes (at 3 deg between tilt sizes 2, 4, 6 its weights are about
-  // 0.72, 0.45, -0.04), so with fully correlated errors its standard error can exceed this by
-  // about 15-20 %; the response's share of a point's total error is mostly small.
+  // 0.72, 0.45, -0.04), so its standard error can exceed this by 14 % there with equal, fully
+  // correlated errors, and by up to about 30 % at worst (EffectTermResponse.TheCubicLeansOn...):
+  // the response's part of each point's error is understated by that much (not corrected yet).
   double response(std::size_t i, double da, double& variance) const;
 };
 

@@ -35,8 +35,9 @@ for twin in "$dest"/twins/*.toml; do
   sed -i "s#^scenario = \"$old\"#scenario = \"$new\"#" "$twin"
 done
 /usr/bin/python3 calibrate/blind_summary.py "$dest" > /dev/null
-nulls=$(cd "$dest" && ls -d null-* 2>/dev/null | grep -v '\.time$' | tr '\n' ' ')
-/usr/bin/python3 calibrate/score_lean.py --cases "${nulls% }" "$dest" > "$dest/lean.txt"
+nulls=()
+for twin in "$dest"/twins/null-*.toml; do nulls+=("$(basename "$twin" .toml)"); done
+/usr/bin/python3 calibrate/score_lean.py --cases "${nulls[*]}" "$dest" > "$dest/lean.txt"
 /usr/bin/python3 calibrate/oracle_scale.py "$dest" > "$dest/oracle_scale.txt"
 /usr/bin/python3 calibrate/interval_sides.py "$dest" > "$dest/interval_sides.txt"
 echo "copied $pass to $dest (without its stores); summary in $dest/report.md"

@@ -27,20 +27,22 @@ if [[ ${#cases[@]} -eq 0 ]]; then
   for twin in "$pass"/twins/null-*.toml; do cases+=("$(basename "$twin" .toml)"); done
 fi
 # The pass's options (a pass without the record ran with none), its signatures' setting toggled. The
-# setting is what its calibrations record (summary.json "independent_signatures"; absent before the
-# option existed: shared), since a pass without either flag ran its binary's default (shared up to
-# pass 20's binary, a build of 13aa5bd; on seeds of their own from bf54828). Shared again: --shared-signatures where GAPFLOW
-# knows it, else no flag (a binary from before it, whose default is shared).
+# setting is what the first case's calibration records (summary.json "independent_signatures";
+# absent before the option existed: shared), since a pass without either flag ran its binary's
+# default (shared up to pass 20's binary, a build of 13aa5bd; on seeds of their own from bf54828).
+# Shared again: --shared-signatures where GAPFLOW knows it, else no flag (a binary from before it,
+# whose default is shared).
 options=()
 if [[ -f $pass/calibrate_options ]]; then read -r -a options < "$pass/calibrate_options" || true; fi
 replay_options=()
 for o in "${options[@]}"; do
   [[ $o == --independent-signatures || $o == --shared-signatures ]] || replay_options+=("$o")
 done
-first_summary=$(compgen -G "$pass/null-*/summary.json" | head -1 || true)
-[[ -n $first_summary ]] || { echo "error: no calibrated null in $pass" >&2; exit 2; }
+[[ ${#cases[@]} -gt 0 ]] || { echo "error: no null twin in $pass, and no CASE given" >&2; exit 2; }
+first_summary=$pass/${cases[0]}/summary.json
+[[ -f $first_summary ]] || { echo "error: $pass has no calibration of ${cases[0]}" >&2; exit 2; }
 if grep -q '"independent_signatures": true' "$first_summary"; then
-  label="with the signatures shared (the pass's own seeds for them toggled off)"
+  label="with the signatures sharing the baseline's runs"
   if "$gapflow" calibrate --help 2>/dev/null | grep -q -- '--shared-signatures'; then replay_options+=(--shared-signatures); fi
 else
   label="with --independent-signatures"

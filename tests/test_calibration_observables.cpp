@@ -136,7 +136,8 @@ TEST(EffectTermResponse, FourSizesOfACurvedResponseAreInterpolatedWithoutTheStra
   // within 0.05 deg from 2.5 deg up (it gives 2.558, 3.381, 4.575, 5.385) and 0.12 below (0.423,
   // 0.884, 1.399; with Boost's default end slopes, the end segments' own, 0.129, 0.556, 1.272).
   const double a = -0.01;  // fit-scale shift per deg^2
-  EffectTerm t = EffectTerm::single_step("lateral_tilt", "plane.lateral_tilt_deg", 0.0, 0.0, 6.0, 4.0, {a * 4}, {0.001});
+  EffectTerm t =
+      EffectTerm::single_step("lateral_tilt", "plane.lateral_tilt_deg", 0.0, 0.0, 6.0, 4.0, {a * 4}, {0.001});
   t.add_size(2.0, {a * 4}, {0.001});
   t.add_size(6.0, {a * 36}, {0.001});
   double var = 0;
@@ -163,6 +164,39 @@ TEST(EffectTermResponse, FourSizesOfACurvedResponseAreInterpolatedWithoutTheStra
   }
   // Below the first size: the first segment's line (slope 0.5 from -2 to 0).
   EXPECT_NEAR(wiggly.response(0, -3.0, var), -1.5, 1e-12);
+}
+
+TEST(EffectTermResponse, TheCubicLeansOnMoreSizesThanItsVarianceBoundCounts) {
+  // The response's variance is the two neighbouring sizes' standard errors interpolated linearly
+  // (fit.hpp): for a straight line, weights 1 - w and w, a bound whatever their correlation. The
+  // cubic's value also moves with the next sizes. Its weights on the sizes 2, 4 and 6 deg (here by
+  // finite differences on the tilt's quadratic; the size at neutral has no error) sum to 1.14 at
+  // 3 deg and 1.00 at 5 deg, their absolute values to 1.21 and 1.32: so its standard error exceeds
+  // the bound by 14 % with equal, fully correlated errors at 3 deg, and by up to about 30 % at worst
+  // (README, item 4).
+  const double a = -0.01;
+  const std::vector<double> sizes{2.0, 4.0, 6.0};
+  const auto term_with = [&](const std::vector<double>& shift) {
+    EffectTerm t = EffectTerm::single_step("e", "k", 0.0, 0.0, 6.0, 4.0, {shift[1] / 4}, {0.001});
+    t.add_size(2.0, {shift[0]}, {0.001});
+    t.add_size(6.0, {shift[2]}, {0.001});
+    return t;
+  };
+  const std::vector<double> base{a * 4, a * 16, a * 36};
+  double var = 0;
+  for (double da : {3.0, 5.0}) {
+    const double at = term_with(base).response(0, da, var);
+    double sum = 0, sum_abs = 0;
+    for (std::size_t k = 0; k < sizes.size(); ++k) {
+      std::vector<double> moved = base;
+      moved[k] += 1e-6;
+      const double w = (term_with(moved).response(0, da, var) - at) / 1e-6;
+      sum += w, sum_abs += std::abs(w);
+    }
+    EXPECT_NEAR(sum, da == 3.0 ? 1.14 : 1.00, 0.01) << da;
+    EXPECT_GT(sum_abs, 1.2) << da;
+    EXPECT_LT(sum_abs, 1.33) << da;
+  }
 }
 
 // kFourPoints with an evaluator on a store of its own, 2 workers (members in that order:

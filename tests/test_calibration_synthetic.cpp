@@ -88,7 +88,8 @@ double synthetic_ln_j(const CompiledScenario& sc, double common_noise, double ow
          0.06 * d.particles.drag_per_s * steep * (1 + kDragFrictionCoupling * (mu - 0.3)) -
          0.04 * d.particles.spinning_friction_mm * steep * 4.5 / w_over_d -
          6.0 * d.particles.rolling_resistance / steep -
-         g_tilt_curvature * std::pow(d.plane.lateral_tilt_deg, 2) * (w_over_d / 4.5) / steep + g_noise.common * common_noise + own_noise_scale(d) * g_noise.own * own_noise;
+         g_tilt_curvature * std::pow(d.plane.lateral_tilt_deg, 2) * (w_over_d / 4.5) / steep +
+         g_noise.common * common_noise + own_noise_scale(d) * g_noise.own * own_noise;
 }
 
 RunRecord synthetic_run(const Job& job, const std::atomic<bool>*) {
@@ -291,7 +292,7 @@ TEST(CalibrationSynthetic, ACurvedResponseIsSizedWithoutTheStraightLinesBiasTowa
   EXPECT_NEAR(found.value, 4.559, 0.03) << run.log;
   EXPECT_LE(found.lo95, 4.559);
   EXPECT_GE(found.hi95, 4.559);
-  EXPECT_LT(found.hi95 - found.lo95, 0.5) << "the premise: an interval narrow enough to miss by 0.08 deg";
+  EXPECT_LT(found.hi95 - found.lo95, 0.16) << "the premise: an interval narrow enough to miss by 0.08 deg";
 }
 
 // A twin's data file gives its calibrations the design's model seed unless told another: a blind
