@@ -15,8 +15,22 @@ using std::isnan;
 
 namespace gapflow {
 
+// The cubic through one point's shifts, and the same cubic with each measured size's shift moved up
+// and down by `nudge` in turn: their differences at a size give the cubic's weights on the sizes, for
+// its variance. Both sides, since it is not linear in them and not everywhere smooth: its slopes are
+// harmonic means, and clamped to 0 where the secants turn, which is where an even response's end
+// slope at neutral sits (a tilt's: there the weights of the two sides differ by up to 4 x).
 struct SmoothResponse {
-  boost::math::interpolators::pchip<std::vector<double>> at;
+  using Pchip = boost::math::interpolators::pchip<std::vector<double>>;
+  Pchip at;
+  std::vector<Pchip> up, down;  // [size]: the shift at that size moved up, down by nudge
+  double nudge = 0;             // fit scale
+
+  // The weight of size j at da: the one-sided one of larger magnitude.
+  double weight(std::size_t j, double da, double value) const {
+    const double above = (up[j](da) - value) / nudge, below = (value - down[j](da)) / nudge;
+    return std::abs(above) >= std::abs(below) ? above : below;
+  }
 };
 
 namespace {
@@ -37,6 +51,43 @@ double end_slope(const std::vector<double>& x, const std::vector<double>& y, boo
   if (d0 * d1 < 0 && std::abs(d) > 3 * std::abs(d0)) return 3 * d0;
   return d;
 }
+
+SmoothResponse::Pchip pchip_through(const std::vector<double>& x, std::vector<double> y) {
+  const double left = end_slope(x, y, false), right = end_slope(x, y, true);
+  return SmoothResponse::Pchip(std::vector<double>(x), std::move(y), left, right);
+}
+
+SmoothResponse smooth_response(const std::vector<double>& x, std::vector<double> y) {
+  double scale = 0;
+  for (double v : y) scale = std::max(scale, std::abs(v));
+  SmoothResponse r{pchip_through(x, y), {}, {}, 1e-7 * std::max(scale, 1e-9)};
+  for (std::size_t j = 0; j < y.size(); ++j) {
+    for (const double sign : {1.0, -1.0}) {
+      std::vector<double> moved = y;
+      moved[j] += sign * r.nudge;
+      (sign > 0 ? r.up : r.down).push_back(pchip_through(x, std::move(moved)));
+    }
+  }
+  return r;
+}
+
+// The largest variance of sum_j w_j e_j over the sizes' errors e_j (standard errors s_j) when their
+// correlations lie in [0, 1] (the sizes' shifts share the neutral runs and their seeds, which
+// correlates them positively; a negative correlation is not allowed for): it is linear in each
+// correlation, so the largest is at 1 where the two weights agree in sign and 0 where
+// they do not, (sum of w_j s_j over w_j > 0)^2 + (sum of |w_j| s_j over w_j < 0)^2. For a straight
+// line between two sizes this is ((1-w) sa + w sb)^2 (exact next to neutral, where sa = 0), and
+// beyond the end sizes (1-w)^2 va + w^2 vb. The independent case's variance, which dips to half at
+// mid-segment, drew fits to the sizes or away from them (pass 6). Where the cubic's weights differ
+// by side (SmoothResponse::weight), the larger of each: on the tilt's quadratic through 0, 2, 4 and
+// 6 deg this holds the spread of its value at 0.5-5 deg for correlations 0 and 1; with full
+// correlation the spread is 0.83-0.96 of it from 2.5 deg up, 0.23 at 0.5 deg (conservative near
+// neutral; EffectTermResponse.TheCubicsVarianceCountsEverySizeItLeansOn).
+struct VarianceBound {
+  double positive = 0, negative = 0;
+  void add(double weight, double se) { (weight > 0 ? positive : negative) += std::abs(weight) * se; }
+  double value() const { return positive * positive + negative * negative; }
+};
 
 }  // namespace
 
@@ -264,30 +315,28 @@ void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<d
     std::vector<double> y;
     for (const std::vector<double>& s : shift) y.push_back(s[i]);
     if (!std::all_of(y.begin(), y.end(), [](double v) { return std::isfinite(v); })) continue;
-    const double left = end_slope(offsets, y, false), right = end_slope(offsets, y, true);
-    smooth[i] = std::make_shared<const SmoothResponse>(SmoothResponse{
-        boost::math::interpolators::pchip<std::vector<double>>(std::vector<double>(offsets), std::move(y), left, right)});
+    smooth[i] = std::make_shared<const SmoothResponse>(smooth_response(offsets, std::move(y)));
   }
 }
 
 double EffectTerm::response(std::size_t i, double da, double& variance) const {
   if (offsets.size() < 2) return variance = 0, 0.0;
-  // The segment that holds da (the end segments extend beyond the measured sizes).
+  VarianceBound bound;
+  const bool inside = da >= offsets.front() && da <= offsets.back();
+  if (inside && i < smooth.size() && smooth[i]) {
+    const SmoothResponse& r = *smooth[i];
+    const double value = r.at(da);
+    for (std::size_t j = 0; j < offsets.size(); ++j) bound.add(r.weight(j, da, value), shift_se[j][i]);
+    variance = bound.value();
+    return value;
+  }
+  // A straight line through the segment that holds da (the end segments extend beyond the sizes).
   std::size_t k = 0;
   while (k + 2 < offsets.size() && da > offsets[k + 1]) ++k;
   const double w = (da - offsets[k]) / (offsets[k + 1] - offsets[k]);
-  const double a = shift[k][i], b = shift[k + 1][i];
-  // The two sizes' errors are correlated (their paired runs share the neutral ones), so the
-  // interpolant's variance lies between the independent case's (1-w)^2 va + w^2 vb, which dips
-  // to half at mid-segment (a dip draws a fit to or away from the sizes), and the fully
-  // correlated ((1-w) sa + w sb)^2, which bounds it for any correlation, does not dip, and is
-  // exact next to neutral (sa = 0 there). Beyond the end sizes the independent case's is larger.
-  const double sa = shift_se[k][i], sb = shift_se[k + 1][i];
-  const double correlated = (1 - w) * sa + w * sb;
-  variance = std::max(correlated * correlated, (1 - w) * (1 - w) * sa * sa + w * w * sb * sb);
-  const bool inside = da >= offsets.front() && da <= offsets.back();
-  if (inside && i < smooth.size() && smooth[i]) return smooth[i]->at(da);
-  return a + w * (b - a);
+  bound.add(1 - w, shift_se[k][i]), bound.add(w, shift_se[k + 1][i]);
+  variance = bound.value();
+  return shift[k][i] + w * (shift[k + 1][i] - shift[k][i]);
 }
 
 Prediction Surface::predict(const ParameterSet& params, const DataFile& data) const {

@@ -101,12 +101,11 @@ struct EffectTerm {
                                 std::vector<double> slope, std::vector<double> slope_se);
   // Add the shifts measured at offset `da` (kept sorted); the interpolants are made anew.
   void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at);
-  // Shift at point i for an offset da, and its variance: the two neighbouring sizes' standard
-  // errors interpolated linearly, a bound for a straight line whatever their correlation. The
-  // cubic also leans on the next sizes (at 3 deg between tilt sizes 2, 4, 6 its weights are about
-  // 0.72, 0.45, -0.04), so its standard error can exceed this by 14 % there with equal, fully
-  // correlated errors, and by up to about 30 % at worst (EffectTermResponse.TheCubicLeansOn...):
-  // the response's part of each point's error is understated by that much (not corrected yet).
+  // Shift at point i for an offset da, and its variance: the largest over the sizes' errors'
+  // correlations in [0, 1] of the interpolant's weights on the sizes (for a straight line 1 - w and
+  // w; the cubic also leans on the next sizes, its weights by finite differences, the larger
+  // one-sided one where it is not smooth). Until the pass after 20 the two neighbours' standard errors
+  // were interpolated linearly, which understated the cubic's by 14 % at 3 deg on the tilt's quadratic.
   double response(std::size_t i, double da, double& variance) const;
 };
 
