@@ -222,7 +222,7 @@ TEST(EffectTermResponse, TheCubicsVarianceCountsEverySizeItLeansOn) {
       const double spread = (s2 - s1 * s1 / draws) / (draws - 1);
       EXPECT_LT(spread, 1.1 * variance) << da << " at correlation " << rho;  // 1.1: the draws' own error, ~2 %
       if (rho == 1.0 && da > 2.0) {  // weights of nearly one sign: near the bound
-        EXPECT_GT(spread, 0.8 * variance) << da;
+        EXPECT_GT(spread, 0.75 * variance) << da;  // 0.83 at 5 deg (200 000 draws): ~2 sd of these draws
       }
     }
   }

@@ -364,7 +364,7 @@ TEST(CalibrationSynthetic, TheHeldOutRouteTriesNothingOnANullTwinWithoutASignifi
 
 // Without noise the loop is unbiased: a planted drag comes back within 1.5 % and the friction at its
 // truth (2.974 for 3 at e174dde; 2.961 with the response's variance counting every size the cubic
-// leans on: that variance is larger between sizes than at them, 17 % at 3 deg on the tilt's
+// leans on: its standard error is larger between sizes than at them, 17 % at 3 deg on the tilt's
 // quadratic through 0, 2, 4, 6 deg, and without noise the deviance's 2 ln sigma term, which then
 // decides, draws the fit toward a measured size). Blind passes 9-13 missed 31 of their recovered
 // sizes' intervals, every one toward neutral; this says the cause is not in the fit's structure
