@@ -162,6 +162,12 @@ class BlindAnalysis(unittest.TestCase):
         self.assertEqual(code, 0)
         self.assertIn("identified 2 of 4 (50 %); visible 3 (ceiling 75 %); identified among the visible 2 of 3 (67 %)", out)
         self.assertIn("pooled: identified 4 of 8", out)
+        # The exact binomial interval for 4 of 8 (beta quantiles 0.025 of B(4, 5), 0.975 of B(5, 4)).
+        self.assertIn("identified share 95 % interval [15.7, 84.3] %", out)
+        code, out, _ = run("visibility_ceiling.py", "--by-case", self.pass_dir, self.pass_dir)
+        self.assertEqual(code, 0)
+        self.assertIn("  drag-low: 2 of 2; visible 2; 2 of 2", out)
+        self.assertNotIn("null-1:", out)  # singles only
 
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)
