@@ -82,8 +82,8 @@ SmoothResponse smooth_response(const std::vector<double>& x, std::vector<double>
 // mid-segment, drew fits to the sizes or away from them (pass 6). Where the cubic's weights differ
 // by side (SmoothResponse::weight), the larger of each: on the tilt's quadratic through 0, 2, 4 and
 // 6 deg this holds the spread of its value at 0.5-5 deg for correlations 0 and 1; with full
-// correlation the spread is 0.83-0.96 of it from 2.5 deg up, 0.23 at 0.5 deg (conservative near
-// neutral; EffectTermResponse.TheCubicsVarianceCountsEverySizeItLeansOn).
+// correlation the spread is 0.87 of it at 3 deg, 0.85 at 5, 0.47 at 1 and 0.23 at 0.5 (conservative
+// near neutral; EffectTermResponse.TheCubicsVarianceCountsEverySizeItLeansOn prints them).
 struct VarianceBound {
   double positive = 0, negative = 0;
   void add(double weight, double se) { (weight > 0 ? positive : negative) += std::abs(weight) * se; }

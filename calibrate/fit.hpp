@@ -104,8 +104,9 @@ struct EffectTerm {
   // Shift at point i for an offset da, and its variance: the largest over the sizes' errors'
   // correlations in [0, 1] of the interpolant's weights on the sizes (for a straight line 1 - w and
   // w; the cubic also leans on the next sizes, its weights by finite differences, the larger
-  // one-sided one where it is not smooth). Until the pass after 20 the two neighbours' standard errors
-  // were interpolated linearly, which understated the cubic's by 14 % at 3 deg on the tilt's quadratic.
+  // one-sided one where it is not smooth). Before 422ca03 (blind passes up to 20) the two neighbours'
+  // standard errors were interpolated linearly, which understated the cubic's by 14 % at 3 deg on the
+  // tilt's quadratic.
   double response(std::size_t i, double da, double& variance) const;
 };
 

@@ -11,6 +11,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
+#include <fmt/format.h>
 #include <random>
 
 namespace gapflow {
@@ -220,6 +222,8 @@ TEST(EffectTermResponse, TheCubicsVarianceCountsEverySizeItLeansOn) {
         s1 += v, s2 += v * v;
       }
       const double spread = (s2 - s1 * s1 / draws) / (draws - 1);
+      // The ratios README and fit.cpp quote (spread over the bound), printed so that they can be remade.
+      std::cout << fmt::format("{} deg, correlation {}: spread / variance {:.2f}\n", da, rho, spread / variance);
       EXPECT_LT(spread, 1.1 * variance) << da << " at correlation " << rho;  // 1.1: the draws' own error, ~2 %
       if (rho == 1.0 && da > 2.0) {  // weights of nearly one sign: near the bound
         EXPECT_GT(spread, 0.75 * variance) << da;  // 0.83 at 5 deg (200 000 draws): ~2 sd of these draws
