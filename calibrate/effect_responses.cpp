@@ -70,6 +70,36 @@ std::vector<double> refinement_offsets(const Candidate& c, const EffectDef& e) {
   return out;
 }
 
+std::vector<double> sizes_to_measure(const std::vector<double>& measured, const std::vector<double>& wanted,
+                                     double min_spacing) {
+  std::vector<double> sizes(measured);
+  std::sort(sizes.begin(), sizes.end());
+  std::vector<double> out;
+  auto clear_of_all = [&](double da) {
+    for (double m : sizes)
+      if (std::abs(da - m) < min_spacing) return false;
+    for (double m : out)
+      if (std::abs(da - m) < min_spacing) return false;
+    return true;
+  };
+  auto measured_already = [&](double da) {
+    return std::any_of(sizes.begin(), sizes.end(), [&](double m) { return std::abs(da - m) <= 1e-12 * (1 + std::abs(m)); });
+  };
+  for (double da : wanted) {
+    if (measured_already(da)) continue;
+    if (!clear_of_all(da)) {
+      // The middle of the measured gap that holds da (none beyond the outermost sizes).
+      const auto above = std::upper_bound(sizes.begin(), sizes.end(), da);
+      if (above == sizes.begin() || above == sizes.end()) continue;
+      da = (*(above - 1) + *above) / 2;
+      if (!clear_of_all(da)) continue;
+    }
+    out.push_back(da);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 Reference EffectResponses::reference_with(const BaselineFit& base, const ParameterSet& fitted,
                                           const std::vector<EffectTerm>& effects) {
   Reference r;
@@ -252,7 +282,7 @@ EffectTerm EffectResponses::measure_term(const Candidate& c, const Reference& at
 void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std::vector<double>& wanted,
                                 const Reference& at) {
   std::vector<double> offsets;
-  for (double da : wanted)
+  for (double da : sizes_to_measure(term.offsets, wanted, std::abs(c.step) / 4))
     if (valid_everywhere(c.key, c.neutral + da)) offsets.push_back(da);
   // The fit may move the size only where every point still makes a scenario (a gap offset
   // below -W closes the gap): the range shrinks toward neutral until it does.

@@ -71,6 +71,17 @@ std::vector<ParameterSet> nodes_with_effects(const std::vector<ParameterSet>& no
 // there is of it, on the other side of neutral when the range goes there.
 std::vector<double> refinement_offsets(const Candidate& c, const EffectDef& e);
 
+// Of the `wanted` sizes (offsets from neutral), those worth measuring beside the `measured` ones
+// (0 included), ascending: a size closer than `min_spacing` to a measured or already chosen one
+// moves to the middle of the gap between measured sizes that holds it, and is dropped if that is
+// close too. Two sizes close together leave a segment whose slope is their noise over their
+// distance, and the fit finds a narrow false well in it: blind pass 20's rolling-high had rolling
+// resistance measured at 0.0095 beside its first step 0.01 (the step moved to the range's end,
+// 0.019, whose half is 0.0095), and its interval came out [0.01059, 0.01082] where the data's
+// signal (lambda 17) allows one about 40 times wider.
+std::vector<double> sizes_to_measure(const std::vector<double>& measured, const std::vector<double>& wanted,
+                                     double min_spacing);
+
 class EffectResponses {
  public:
   EffectResponses(const DataFile& data, const CalibrationDef& def, Evaluator& ev, Say say)

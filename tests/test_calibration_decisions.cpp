@@ -271,6 +271,22 @@ TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFit
   EXPECT_EQ(nodes_with_effects(nodes, fitted, {})[1].label(), nodes[1].label());
 }
 
+TEST(EffectResponses, AMoreSizeBesideAMeasuredOneMovesToTheMiddleOfItsGap) {
+  // Blind pass 20's rolling-high: rolling resistance's first step 0.01 was too weak, the range's
+  // end (0.019 from neutral) became its step, and the refinement's half step, 0.0095, lay 0.0005
+  // from the first step. Its segment's slope was the two sizes' noise over 0.0005, and the
+  // interval came out [0.01059, 0.01082]. The half step now goes to the middle of 0..0.01.
+  EXPECT_EQ(sizes_to_measure({0.0, 0.01, 0.019}, {0.0095}, 0.019 / 4), (std::vector<double>{0.005}));
+  // The usual first measurement (only neutral measured): the step and its refinements, apart by
+  // at least a quarter of the step by construction, are all kept.
+  EXPECT_EQ(sizes_to_measure({0.0}, {2.0, 1.0, 4.0, 6.0}, 2.0 / 4), (std::vector<double>{1.0, 2.0, 4.0, 6.0}));
+  EXPECT_EQ(sizes_to_measure({0.0}, {-0.4, -0.2, 0.4}, 0.4 / 4), (std::vector<double>{-0.4, -0.2, 0.4}));
+  // A size measured already is not measured again; one close to the outermost size has no gap
+  // to move into and is dropped; one whose gap's middle is close to a chosen size too.
+  EXPECT_EQ(sizes_to_measure({0.0, 1.0, 2.0}, {2.0, 2.1, 1.0}, 0.25), (std::vector<double>{}));
+  EXPECT_EQ(sizes_to_measure({0.0, 1.0}, {0.9, 0.45}, 0.25), (std::vector<double>{0.5}));
+}
+
 TEST(EffectResponses, TheNodesNearestAFitAreRankedByItsFreeParametersAlone) {
   // Blind pass 10's rolling-high: surface nodes 0.30-0.50, the baseline fit 0.450 (signatures at
   // 0.45, 0.50, 0.40); every candidate's joint fit moved the friction to about 0.35.
