@@ -381,6 +381,26 @@ TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {
   }
   EXPECT_EQ(rows, 2);
 
+  // The verdict names the catalogue as the attribution's limit only where an effect was added.
+  const auto verdict_line = [&](const std::filesystem::path& md_path) {
+    std::ifstream in(md_path);
+    std::string l;
+    while (std::getline(in, l))
+      if (l.rfind("**Verdict:", 0) == 0) return l;
+    return std::string();
+  };
+  EXPECT_EQ(verdict_line(dir / "report.md").find("outside it"), std::string::npos);
+  CalibrationResult found = r;
+  AddedEffect drag;
+  drag.effect = "linear_drag", drag.key = "particles.drag_per_s", drag.value = 1.7, drag.lo95 = 1.4, drag.hi95 = 2.6;
+  drag.group = {"linear_drag"};
+  found.effects.push_back(drag);
+  testing::TempDir dir_found("gapflow-calibration-report-found");
+  write_calibration_outputs(data, found, dir_found.path(), false);
+  EXPECT_NE(verdict_line(dir_found / "report.md").find("an effect outside it that moves these observables alike"),
+            std::string::npos)
+      << verdict_line(dir_found / "report.md");
+
   const std::optional<std::string> python = find_python_with_matplotlib();
   if (!python) GTEST_SKIP() << "no python3 to parse summary.json";
   const std::string check = fmt::format(
