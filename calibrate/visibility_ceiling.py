@@ -15,12 +15,32 @@ too narrow for them). `--by-case` adds, per case over the passes given, how ofte
 and how often visible: where the misses are. Exit 2 on a folder without cases.csv.
 
     /usr/bin/python3 calibrate/visibility_ceiling.py --by-case results/calibration-blind-pass{10,12,13,14,15,16,17,18,19}
+
+`--rule-1` adds the ceiling of a loop bound by the issue's rule 1: it attributes only when the
+fitted points' chi^2 is beyond the noise (p < 0.05) AND the best score is significant. For each
+single-effect twin, with its oracle's lambda (truth/<case>.json `signal`: the chi^2 the planted
+effect adds over the fitted points beyond the free parameter's refit), the residual is taken as
+linear: its component along the known signature is Z + sqrt(lambda), the other dof - 1 components
+central, so the score statistic S = (Z + sqrt(lambda))^2 and the chi^2 is S + R with R ~
+chi^2(dof - 1) independent of S (dof: fitted points + measured free parameters - free
+parameters). The chance of passing both gates is P(S > critical and S + R > chi^2_0.95(dof)),
+the score's critical value the oracle's own (Bonferroni over every applicable effect). Its sum
+over the twins is what an oracle bound by rule 1 identifies on average; per pass, the chance that
+it identifies at least 90 % of the single effects (the issue's bar) follows from those chances
+(independent twins: a Poisson-binomial). With `--remade NAME`, a twin's truth is read from
+PASS/NAME/truth/ where that holds it (the oracle remade for passes 12-15: `resignal`). With
+`--by-case` too, the rule-1 oracle's expectation and the loop's count per case.
+
+    /usr/bin/python3 calibrate/visibility_ceiling.py --rule-1 --remade resignal results/calibration-blind-pass{10,12,13,14,15,16,17,18,19,20}
 """
 import csv
+import json
+import math
 import os
 import sys
 
-from scipy.stats import beta
+import numpy as np
+from scipy.stats import beta, chi2, norm
 
 from blind_summary import NOT_SINGLE
 
@@ -53,6 +73,66 @@ def counts(pass_dir):
     }
 
 
+def rule1_power(lam, dof, critical, alpha=0.05):
+    """P(S > critical and S + R > chi^2_{1-alpha}(dof)), S = (Z + sqrt(lam))^2, R ~ chi^2(dof - 1)."""
+    z = np.linspace(-12.0, 12.0, 24001)
+    s = (z + math.sqrt(max(lam, 0.0))) ** 2
+    rest = chi2.sf(np.maximum(chi2.isf(alpha, dof) - s, 0.0), dof - 1)
+    return float(np.trapz(norm.pdf(z) * np.where(s > critical, rest, 0.0), z))
+
+
+def at_least(chances, k):
+    """P(at least k successes) of independent trials with the given chances (Poisson-binomial)."""
+    dist = [1.0]
+    for p in chances:
+        dist = [(dist[j] if j < len(dist) else 0.0) * (1 - p) + (dist[j - 1] * p if j > 0 else 0.0)
+                for j in range(len(dist) + 1)]
+    return sum(dist[k:])
+
+
+def rule1_chances(pass_dir, remade=None):
+    """Per single-effect twin: the chance that an oracle bound by rule 1 attributes its effect."""
+    out = []
+    for r in single_rows(pass_dir):
+        path = os.path.join(pass_dir, "truth", r["case"] + ".json")
+        if remade and os.path.isfile(os.path.join(pass_dir, remade, "truth", r["case"] + ".json")):
+            path = os.path.join(pass_dir, remade, "truth", r["case"] + ".json")
+        if not os.path.isfile(path):
+            print(f"error: no {path} (--rule-1 reads the twins' truth)", file=sys.stderr)
+            sys.exit(2)
+        with open(path, encoding="utf-8") as f:
+            t = json.load(f)
+        sig = t.get("signal") or {}
+        if not sig.get("chi2") and sig.get("chi2") != 0:
+            out.append(0.0)
+            continue
+        free = sum(1 for v in t["planted"] if v["name"] == "free")
+        measured = sum(1 for v in (t.get("measured") or {}).values() if v is not None and math.isfinite(v))
+        out.append(rule1_power(sig["chi2"], sig["points"] + measured - free, sig["critical"]))
+    return out
+
+
+def rule1_by_case(pass_dirs, remade):
+    cases = {}
+    for pass_dir in pass_dirs:
+        for r, chance in zip(single_rows(pass_dir), rule1_chances(pass_dir, remade)):
+            c = cases.setdefault(r["case"], {"n": 0, "expected": 0.0, "identified": 0})
+            c["n"] += 1
+            c["expected"] += chance
+            c["identified"] += r["identified"] == "True"
+    print("case: rule 1's oracle, expected identified; the loop, identified")
+    for name, c in sorted(cases.items(), key=lambda item: (item[1]["expected"], item[0])):
+        print(f"  {name}: {c['expected']:.1f} of {c['n']}; {c['identified']} of {c['n']}")
+
+
+def rule1_line(name, chances):
+    n = len(chances)
+    bar = math.ceil(0.9 * n - 1e-9)
+    return (f"{name}: rule 1's two gates, an oracle: expected identified {sum(chances):.1f} of {n} "
+            f"({100 * sum(chances) / n:.0f} %); both gates' chance >= 0.8 in {sum(c >= 0.8 for c in chances)}; "
+            f"chance of >= {bar} of {n} {at_least(chances, bar):.2f}")
+
+
 def line(name, c):
     pct = lambda a, b: f"{100 * a / b:.0f} %" if b else "-"
     return (f"{name}: identified {c['identified']} of {c['singles']} ({pct(c['identified'], c['singles'])}); "
@@ -79,9 +159,18 @@ def by_case(pass_dirs):
 def main():
     args = sys.argv[1:]
     with_cases = "--by-case" in args
-    pass_dirs = [a for a in args if a != "--by-case"]
+    with_rule1 = "--rule-1" in args
+    remade = None
+    if "--remade" in args:
+        i = args.index("--remade")
+        if i + 1 >= len(args):
+            print("error: --remade needs a folder name (e.g. resignal)", file=sys.stderr)
+            sys.exit(2)
+        remade = args[i + 1]
+        args = args[:i] + args[i + 2:]
+    pass_dirs = [a for a in args if a not in ("--by-case", "--rule-1")]
     if not pass_dirs:
-        print("usage: visibility_ceiling.py [--by-case] PASS_DIR [PASS_DIR...]", file=sys.stderr)
+        print("usage: visibility_ceiling.py [--by-case] [--rule-1 [--remade NAME]] PASS_DIR [PASS_DIR...]", file=sys.stderr)
         sys.exit(2)
     total = {"singles": 0, "identified": 0, "visible": 0, "visible_identified": 0}
     for pass_dir in pass_dirs:
@@ -94,6 +183,18 @@ def main():
         print(line("pooled", total) + f"; identified share 95 % interval [{100 * lo:.1f}, {100 * hi:.1f}] %")
     if with_cases:
         by_case(pass_dirs)
+    if with_rule1:
+        pooled = []
+        for pass_dir in pass_dirs:
+            chances = rule1_chances(pass_dir, remade)
+            print(rule1_line(pass_dir, chances))
+            pooled += chances
+        if with_cases:
+            rule1_by_case(pass_dirs, remade)
+        if len(pass_dirs) > 1:
+            n, expected = len(pooled), sum(pooled)
+            print(f"pooled: rule 1's two gates, an oracle: expected identified {expected:.1f} of {n} "
+                  f"({100 * expected / n:.0f} %); both gates' chance >= 0.8 in {sum(c >= 0.8 for c in pooled)}")
 
 
 if __name__ == "__main__":

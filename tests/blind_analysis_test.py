@@ -169,6 +169,35 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("  drag-low: 2 of 2; visible 2; 2 of 2", out)
         self.assertNotIn("null-1:", out)  # singles only
 
+    def test_rule_1_oracle_matches_a_simulation_of_its_two_gates(self):
+        sys.path.insert(0, str(CALIBRATE))
+        import numpy as np
+        from scipy.stats import chi2
+        from visibility_ceiling import at_least, rule1_power
+        # The two gates simulated: a residual of 44 whitened components, the signature along the first
+        # with noncentrality lambda; the score is that component squared, the chi^2 all of them.
+        rng = np.random.default_rng(7)
+        critical, dof = chi2.isf(0.05 / 10, 1), 44
+        for lam in (0.0, 8.0, 18.0, 40.0):
+            r = rng.standard_normal((200000, dof))
+            r[:, 0] += np.sqrt(lam)
+            both = (r[:, 0] ** 2 > critical) & ((r ** 2).sum(axis=1) > chi2.isf(0.05, dof))
+            self.assertAlmostEqual(rule1_power(lam, dof, critical), both.mean(), delta=0.004)
+        # Below either gate's own power: the score alone at lambda 18 passes 0.93 of the time (the oracle's
+        # visible), the chi^2 alone 0.54; together they pass less often than the weaker.
+        self.assertLess(rule1_power(18.0, dof, critical), 0.54)
+        self.assertAlmostEqual(at_least([0.5, 0.5], 1), 0.75)
+        self.assertAlmostEqual(at_least([0.5, 0.5], 2), 0.25)
+        self.assertAlmostEqual(at_least([0.9, 0.8, 0.7], 3), 0.9 * 0.8 * 0.7)
+        # The script sums the single-effect twins' chances (drag-low, spin-high, rolling-high,
+        # rolling-low: lambda 170, 20, 50 and 1 with 44 fitted points and a measured friction).
+        expected = sum(rule1_power(lam, 44, 7.9) for lam in (170.0, 20.0, 50.0, 1.0))
+        code, out, _ = run("visibility_ceiling.py", "--rule-1", self.pass_dir)
+        self.assertEqual(code, 0)
+        self.assertIn(f"expected identified {expected:.1f} of 4", out)
+        self.assertGreater(expected, 2.0)
+        self.assertLess(expected, 3.0)
+
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)
         self.assertEqual(code, 0)
