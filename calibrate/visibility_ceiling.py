@@ -29,7 +29,9 @@ over the twins is what an oracle bound by rule 1 identifies on average; per pass
 it identifies at least 90 % of the single effects (the issue's bar) follows from those chances
 (independent twins: a Poisson-binomial). With `--remade NAME`, a twin's truth is read from
 PASS/NAME/truth/ where that holds it (the oracle remade for passes 12-15: `resignal`). With
-`--by-case` too, the rule-1 oracle's expectation and the loop's count per case.
+`--by-case` too, the rule-1 oracle's expectation and the loop's count per case. With `--scale K`,
+every lambda is multiplied by K first: the same twins with the noise's variance divided by K (K
+times the data's runs and the model's replicates), a projection of what more runs would buy.
 
     /usr/bin/python3 calibrate/visibility_ceiling.py --rule-1 --remade resignal results/calibration-blind-pass{10,12,13,14,15,16,17,18,19,20}
 """
@@ -90,7 +92,7 @@ def at_least(chances, k):
     return sum(dist[k:])
 
 
-def rule1_chances(pass_dir, remade=None):
+def rule1_chances(pass_dir, remade=None, scale=1.0):
     """Per single-effect twin: the chance that an oracle bound by rule 1 attributes its effect."""
     out = []
     for r in single_rows(pass_dir):
@@ -108,14 +110,14 @@ def rule1_chances(pass_dir, remade=None):
             continue
         free = sum(1 for v in t["planted"] if v["name"] == "free")
         measured = sum(1 for v in (t.get("measured") or {}).values() if v is not None and math.isfinite(v))
-        out.append(rule1_power(sig["chi2"], sig["points"] + measured - free, sig["critical"]))
+        out.append(rule1_power(scale * sig["chi2"], sig["points"] + measured - free, sig["critical"]))
     return out
 
 
-def rule1_by_case(pass_dirs, remade):
+def rule1_by_case(pass_dirs, remade, scale):
     cases = {}
     for pass_dir in pass_dirs:
-        for r, chance in zip(single_rows(pass_dir), rule1_chances(pass_dir, remade)):
+        for r, chance in zip(single_rows(pass_dir), rule1_chances(pass_dir, remade, scale)):
             c = cases.setdefault(r["case"], {"n": 0, "expected": 0.0, "identified": 0})
             c["n"] += 1
             c["expected"] += chance
@@ -168,9 +170,19 @@ def main():
             sys.exit(2)
         remade = args[i + 1]
         args = args[:i] + args[i + 2:]
+    scale = 1.0
+    if "--scale" in args:
+        i = args.index("--scale")
+        try:
+            scale = float(args[i + 1])
+            assert scale > 0 and math.isfinite(scale)
+        except (IndexError, ValueError, AssertionError):
+            print("error: --scale needs a positive number (the factor on every lambda)", file=sys.stderr)
+            sys.exit(2)
+        args = args[:i] + args[i + 2:]
     pass_dirs = [a for a in args if a not in ("--by-case", "--rule-1")]
     if not pass_dirs:
-        print("usage: visibility_ceiling.py [--by-case] [--rule-1 [--remade NAME]] PASS_DIR [PASS_DIR...]", file=sys.stderr)
+        print("usage: visibility_ceiling.py [--by-case] [--rule-1 [--remade NAME] [--scale K]] PASS_DIR [PASS_DIR...]", file=sys.stderr)
         sys.exit(2)
     total = {"singles": 0, "identified": 0, "visible": 0, "visible_identified": 0}
     for pass_dir in pass_dirs:
@@ -186,11 +198,11 @@ def main():
     if with_rule1:
         pooled = []
         for pass_dir in pass_dirs:
-            chances = rule1_chances(pass_dir, remade)
+            chances = rule1_chances(pass_dir, remade, scale)
             print(rule1_line(pass_dir, chances))
             pooled += chances
         if with_cases:
-            rule1_by_case(pass_dirs, remade)
+            rule1_by_case(pass_dirs, remade, scale)
         if len(pass_dirs) > 1:
             n, expected = len(pooled), sum(pooled)
             print(f"pooled: rule 1's two gates, an oracle: expected identified {expected:.1f} of {n} "

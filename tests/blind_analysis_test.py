@@ -197,6 +197,13 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn(f"expected identified {expected:.1f} of 4", out)
         self.assertGreater(expected, 2.0)
         self.assertLess(expected, 3.0)
+        # --scale K: every lambda K times (the noise's variance divided by K).
+        doubled = sum(rule1_power(2 * lam, 44, 7.9) for lam in (170.0, 20.0, 50.0, 1.0))
+        self.assertGreater(doubled, expected + 0.2)
+        code, out, _ = run("visibility_ceiling.py", "--rule-1", "--scale", "2", self.pass_dir)
+        self.assertEqual(code, 0)
+        self.assertIn(f"expected identified {doubled:.1f} of 4", out)
+        self.assertEqual(run("visibility_ceiling.py", "--rule-1", "--scale", "-1", self.pass_dir)[0], 2)
 
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)
