@@ -281,13 +281,21 @@ EffectTerm EffectResponses::measure_term(const Candidate& c, const Reference& at
 // its size is fitted on its measured response, not on a line through one step.
 void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std::vector<double>& wanted,
                                 const Reference& at) {
-  std::vector<double> offsets;
-  for (double da : sizes_to_measure(term.offsets, wanted, std::abs(c.step) / 4))
+  // Sizes that make no scenario go first, so that they move or drop no other size.
+  std::vector<double> valid, offsets;
+  for (double da : wanted)
+    if (valid_everywhere(c.key, c.neutral + da)) valid.push_back(da);
+  for (double da : sizes_to_measure(term.offsets, valid, std::abs(c.step) / 4))
     if (valid_everywhere(c.key, c.neutral + da)) offsets.push_back(da);
   // The fit may move the size only where every point still makes a scenario (a gap offset
   // below -W closes the gap): the range shrinks toward neutral until it does.
   for (double* bound : {&term.lo, &term.hi})
     *bound = c.neutral + valid_offset(c.key, c.neutral, *bound - c.neutral).value_or(0.0);
+  if (offsets.empty()) {
+    say_(fmt::format("{}: no more size to measure (each wanted one is measured already or within a quarter step of one)",
+                     c.effect));
+    return;
+  }
   std::vector<ParameterSet> sets;
   for (double da : offsets)
     for (const ParameterSet& n : at.nodes) sets.push_back(n.with(c.key, c.neutral + da));

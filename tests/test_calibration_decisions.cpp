@@ -285,6 +285,12 @@ TEST(EffectResponses, AMoreSizeBesideAMeasuredOneMovesToTheMiddleOfItsGap) {
   // to move into and is dropped; one whose gap's middle is close to a chosen size too.
   EXPECT_EQ(sizes_to_measure({0.0, 1.0, 2.0}, {2.0, 2.1, 1.0}, 0.25), (std::vector<double>{}));
   EXPECT_EQ(sizes_to_measure({0.0, 1.0}, {0.9, 0.45}, 0.25), (std::vector<double>{0.5}));
+  // The first round's refinement of a step of 2 (0 and 2 measured): half step, the range's end
+  // and halfway there, one step on the other side, all kept.
+  EXPECT_EQ(sizes_to_measure({0.0, 2.0}, {1.0, 4.0, 6.0, -2.0}, 0.5), (std::vector<double>{-2.0, 1.0, 4.0, 6.0}));
+  // A negative step (wall friction steps down): the same rules on the other side of neutral.
+  EXPECT_EQ(sizes_to_measure({-0.19, -0.15, 0.0}, {-0.17, -0.075}, 0.15 / 4), (std::vector<double>{-0.075}));
+  EXPECT_EQ(sizes_to_measure({-0.2, -0.1, 0.0}, {-0.095}, 0.2 / 4), (std::vector<double>{-0.05}));
 }
 
 TEST(EffectResponses, TheNodesNearestAFitAreRankedByItsFreeParametersAlone) {
