@@ -3,6 +3,7 @@
 Shared by the analysis scripts (blind_summary.py's siblings), so that each counts the same twins."""
 import glob
 import os
+import sys
 
 
 def calibrations(pass_dir, pattern="*", cases=None):
@@ -16,3 +17,16 @@ def calibrations(pass_dir, pattern="*", cases=None):
             continue
         out.append((case, summary))
     return out
+
+
+def take_option(args, name, what):
+    """The value after `name` in args (both removed), or None; exit 2 where the value is missing."""
+    if name not in args:
+        return None
+    k = args.index(name)
+    if k + 1 >= len(args):
+        print(f"error: {name} needs {what}", file=sys.stderr)
+        sys.exit(2)
+    value = args[k + 1]
+    del args[k:k + 2]
+    return value

@@ -28,7 +28,7 @@ import statistics
 import sys
 
 from blind_summary import NOT_SINGLE, VISIBLE_POWER, truth_label
-from blind_pass import calibrations
+from blind_pass import calibrations, take_option
 
 BINS = ((0, 10), (10, 50), (50, math.inf))
 
@@ -102,19 +102,6 @@ def report(label, rows):
     found_visible = sum(1 for r in visible if r[5])
     print(f"  single effects: identified {found} of {len(singles)}; visible (oracle power >= {VISIBLE_POWER}) "
           f"{len(visible)} of {len(singles)} (the ceiling); identified among the visible {found_visible} of {len(visible)}")
-
-
-def take_option(args, name, what):
-    """The value after `name` in args (both removed), or None; exit 2 where the value is missing."""
-    if name not in args:
-        return None
-    k = args.index(name)
-    if k + 1 >= len(args):
-        print(f"error: {name} needs {what}", file=sys.stderr)
-        sys.exit(2)
-    value = args[k + 1]
-    del args[k:k + 2]
-    return value
 
 
 def main():

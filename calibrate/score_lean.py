@@ -17,7 +17,7 @@ the loop). With --cases, those cases only. Exit 2 on a folder without such calib
 import collections
 import json
 import sys
-from blind_pass import calibrations
+from blind_pass import calibrations, take_option
 
 
 def first_round_candidates(summary_path):
@@ -30,14 +30,8 @@ def first_round_candidates(summary_path):
 
 def main():
     argv = sys.argv[1:]
-    only = None
-    if "--cases" in argv:
-        i = argv.index("--cases")
-        if i + 1 >= len(argv):
-            print("error: --cases needs a list of case names", file=sys.stderr)
-            sys.exit(2)
-        only = set(argv[i + 1].split())
-        argv = argv[:i] + argv[i + 2:]
+    cases = take_option(argv, "--cases", "a list of case names")
+    only = set(cases.split()) if cases is not None else None
     args = [a for a in argv if a != "--all"]
     pattern = "*" if "--all" in argv or only else "null-*"
     if not args:

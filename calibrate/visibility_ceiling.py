@@ -44,6 +44,7 @@ import sys
 import numpy as np
 from scipy.stats import beta, chi2, norm
 
+from blind_pass import take_option
 from blind_summary import NOT_SINGLE
 
 
@@ -162,24 +163,17 @@ def main():
     args = sys.argv[1:]
     with_cases = "--by-case" in args
     with_rule1 = "--rule-1" in args
-    remade = None
-    if "--remade" in args:
-        i = args.index("--remade")
-        if i + 1 >= len(args):
-            print("error: --remade needs a folder name (e.g. resignal)", file=sys.stderr)
-            sys.exit(2)
-        remade = args[i + 1]
-        args = args[:i] + args[i + 2:]
+    remade = take_option(args, "--remade", "a folder name (e.g. resignal)")
+    scale_text = take_option(args, "--scale", "a positive number (the factor on every lambda)")
     scale = 1.0
-    if "--scale" in args:
-        i = args.index("--scale")
+    if scale_text is not None:
         try:
-            scale = float(args[i + 1])
-            assert scale > 0 and math.isfinite(scale)
-        except (IndexError, ValueError, AssertionError):
-            print("error: --scale needs a positive number (the factor on every lambda)", file=sys.stderr)
+            scale = float(scale_text)
+        except ValueError:
+            scale = float("nan")
+        if not (scale > 0 and math.isfinite(scale)):
+            print(f"error: --scale needs a positive number (the factor on every lambda), not '{scale_text}'", file=sys.stderr)
             sys.exit(2)
-        args = args[:i] + args[i + 2:]
     pass_dirs = [a for a in args if a not in ("--by-case", "--rule-1")]
     if not pass_dirs:
         print("usage: visibility_ceiling.py [--by-case] [--rule-1 [--remade NAME] [--scale K]] PASS_DIR [PASS_DIR...]", file=sys.stderr)
