@@ -31,7 +31,9 @@ it identifies at least 90 % of the single effects (the issue's bar) follows from
 PASS/NAME/truth/ where that holds it (the oracle remade for passes 12-15: `resignal`). With
 `--by-case` too, the rule-1 oracle's expectation and the loop's count per case. With `--scale K`,
 every lambda is multiplied by K first: the same twins with the noise's variance divided by K (K
-times the data's runs and the model's replicates), a projection of what more runs would buy.
+times the data's runs and the model's replicates), a projection of what more runs would buy. With
+`--decisive P`, the oracle also tries a best score whose adjusted p is below P where the chi^2 is
+within the noise (the loop's `--decisive-score P`, off by default): what relaxing rule 1 so would buy.
 
     /usr/bin/python3 calibrate/visibility_ceiling.py --rule-1 --remade resignal results/calibration-blind-pass{10,12,13,14,15,16,17,18,19,20}
 """
@@ -76,11 +78,18 @@ def counts(pass_dir):
     }
 
 
-def rule1_power(lam, dof, critical, alpha=0.05):
-    """P(S > critical and S + R > chi^2_{1-alpha}(dof)), S = (Z + sqrt(lam))^2, R ~ chi^2(dof - 1)."""
+def rule1_power(lam, dof, critical, alpha=0.05, decisive=0.0):
+    """P(S > critical and S + R > chi^2_{1-alpha}(dof)), S = (Z + sqrt(lam))^2, R ~ chi^2(dof - 1).
+
+    With `decisive` > 0 (the loop's --decisive-score: a best score whose Bonferroni-adjusted p is
+    below it is tried whatever the chi^2 says), the chi^2 gate is also passed where S alone is
+    beyond that adjusted level (the same Bonferroni factor as `critical`'s)."""
     z = np.linspace(-12.0, 12.0, 24001)
     s = (z + math.sqrt(max(lam, 0.0))) ** 2
     rest = chi2.sf(np.maximum(chi2.isf(alpha, dof) - s, 0.0), dof - 1)
+    if decisive > 0:
+        candidates = alpha / chi2.sf(critical, 1)
+        rest = np.where(s > chi2.isf(decisive / candidates, 1), 1.0, rest)
     return float(np.trapz(norm.pdf(z) * np.where(s > critical, rest, 0.0), z))
 
 
@@ -93,7 +102,7 @@ def at_least(chances, k):
     return sum(dist[k:])
 
 
-def rule1_chances(pass_dir, remade=None, scale=1.0):
+def rule1_chances(pass_dir, remade=None, scale=1.0, decisive=0.0):
     """Per single-effect twin: the chance that an oracle bound by rule 1 attributes its effect."""
     out = []
     for r in single_rows(pass_dir):
@@ -111,14 +120,14 @@ def rule1_chances(pass_dir, remade=None, scale=1.0):
             continue
         free = sum(1 for v in t["planted"] if v["name"] == "free")
         measured = sum(1 for v in (t.get("measured") or {}).values() if v is not None and math.isfinite(v))
-        out.append(rule1_power(scale * sig["chi2"], sig["points"] + measured - free, sig["critical"]))
+        out.append(rule1_power(scale * sig["chi2"], sig["points"] + measured - free, sig["critical"], decisive=decisive))
     return out
 
 
-def rule1_by_case(pass_dirs, remade, scale):
+def rule1_by_case(pass_dirs, remade, scale, decisive):
     cases = {}
     for pass_dir in pass_dirs:
-        for r, chance in zip(single_rows(pass_dir), rule1_chances(pass_dir, remade, scale)):
+        for r, chance in zip(single_rows(pass_dir), rule1_chances(pass_dir, remade, scale, decisive)):
             c = cases.setdefault(r["case"], {"n": 0, "expected": 0.0, "identified": 0})
             c["n"] += 1
             c["expected"] += chance
@@ -174,9 +183,19 @@ def main():
         if not (scale > 0 and math.isfinite(scale)):
             print(f"error: --scale needs a positive number (the factor on every lambda), not '{scale_text}'", file=sys.stderr)
             sys.exit(2)
+    decisive_text = take_option(args, "--decisive", "an adjusted p (the loop's --decisive-score)")
+    decisive = 0.0
+    if decisive_text is not None:
+        try:
+            decisive = float(decisive_text)
+        except ValueError:
+            decisive = float("nan")
+        if not 0 < decisive < 0.05:
+            print(f"error: --decisive needs an adjusted p in (0, 0.05), not '{decisive_text}'", file=sys.stderr)
+            sys.exit(2)
     pass_dirs = [a for a in args if a not in ("--by-case", "--rule-1")]
     if not pass_dirs:
-        print("usage: visibility_ceiling.py [--by-case] [--rule-1 [--remade NAME] [--scale K]] PASS_DIR [PASS_DIR...]", file=sys.stderr)
+        print("usage: visibility_ceiling.py [--by-case] [--rule-1 [--remade NAME] [--scale K] [--decisive P]] PASS_DIR [PASS_DIR...]", file=sys.stderr)
         sys.exit(2)
     total = {"singles": 0, "identified": 0, "visible": 0, "visible_identified": 0}
     for pass_dir in pass_dirs:
@@ -192,11 +211,11 @@ def main():
     if with_rule1:
         pooled = []
         for pass_dir in pass_dirs:
-            chances = rule1_chances(pass_dir, remade, scale)
+            chances = rule1_chances(pass_dir, remade, scale, decisive)
             print(rule1_line(pass_dir, chances))
             pooled += chances
         if with_cases:
-            rule1_by_case(pass_dirs, remade, scale)
+            rule1_by_case(pass_dirs, remade, scale, decisive)
         if len(pass_dirs) > 1:
             n, expected = len(pooled), sum(pooled)
             print(f"pooled: rule 1's two gates, an oracle: expected identified {expected:.1f} of {n} "

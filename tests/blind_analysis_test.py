@@ -183,6 +183,9 @@ class BlindAnalysis(unittest.TestCase):
             r[:, 0] += np.sqrt(lam)
             both = (r[:, 0] ** 2 > critical) & ((r ** 2).sum(axis=1) > chi2.isf(0.05, dof))
             self.assertAlmostEqual(rule1_power(lam, dof, critical), both.mean(), delta=0.004)
+            # --decisive 1e-3: a score beyond the adjusted level 1e-3 (Bonferroni over 10) passes alone.
+            decisive = (r[:, 0] ** 2 > critical) & (both | (r[:, 0] ** 2 > chi2.isf(1e-3 / 10, 1)))
+            self.assertAlmostEqual(rule1_power(lam, dof, critical, decisive=1e-3), decisive.mean(), delta=0.004)
         # Below either gate's own power: the score alone at lambda 18 passes 0.93 of the time (the oracle's
         # visible), the chi^2 alone 0.54; together they pass less often than the weaker.
         self.assertLess(rule1_power(18.0, dof, critical), 0.54)
@@ -204,6 +207,8 @@ class BlindAnalysis(unittest.TestCase):
         self.assertEqual(code, 0)
         self.assertIn(f"expected identified {doubled:.1f} of 4", out)
         self.assertEqual(run("visibility_ceiling.py", "--rule-1", "--scale", "-1", self.pass_dir)[0], 2)
+        self.assertEqual(run("visibility_ceiling.py", "--rule-1", "--decisive", "0.5", self.pass_dir)[0], 2)
+        self.assertGreater(rule1_power(18.0, dof, critical, decisive=1e-3), rule1_power(18.0, dof, critical) + 0.1)
 
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)
