@@ -163,10 +163,15 @@ class Loop {
     base_ = &base;
     std::vector<EffectTerm> terms;
     const Reference baseline = EffectResponses::baseline_reference(base);
-    std::vector<Candidate> cands = responses_.signatures(
-        def_.independent_signatures ? responses_.on_own_seeds(baseline, data_.seed + def_.signature_seed_offset) : baseline,
-        terms);
-    std::optional<Reference> reference = baseline;  // where the next effect's response is measured
+    const Reference signature_ref =
+        def_.independent_signatures ? responses_.on_own_seeds(baseline, data_.seed + def_.signature_seed_offset) : baseline;
+    std::vector<Candidate> cands = responses_.signatures(signature_ref, terms);
+    // Where the next effect's response is measured. In the first round its term already holds the
+    // signature's sizes, so its other sizes are measured against the same unmoved runs: sizes
+    // paired with different runs differ in their noise from one size to the next, and the fit can
+    // find a false well between two of them (blind pass 20's rolling-high, README, Calibration,
+    // item 4, "One seed set per response").
+    std::optional<Reference> reference = signature_ref;
     for (int round_no = 0; round_no < def_.max_effects; ++round_no) {
       Round round = score_round(cands, state, surface);
       const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
