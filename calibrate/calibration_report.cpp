@@ -206,12 +206,15 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                      e.interval_bounded ? "" : ", cut at the end of the range the fit may move it in", e.neutral,
                      e.group.size() > 1 ? fmt::format(", standing for the group {{{}}} that this design cannot tell apart", fmt::join(e.group, ", ")) : "");
   }
-  // An attribution is a choice among the catalogue's effects: one outside it that moves these
-  // observables alike passes every test as the catalogue effect it resembles (blind pass 20).
-  if (!r.effects.empty())
-    o << " The effects are chosen from the catalogue's (`calibrate/effect_catalogue.cpp`): an effect outside it that moves "
-         "these observables alike would be read as the nearest of them (blind pass 20 read a quadratic drag of 16 /m "
-         "as linear drag 1.70 1/s, within the noise).";
+  // An attribution is a choice among the catalogue's effects: one outside it that changes these
+  // observables the same way can pass every test as the catalogue effect it resembles (blind pass
+  // 20's quadratic drag, read as linear drag within the noise; README, Calibration, limits).
+  if (!r.effects.empty()) {
+    o << " Added effects are chosen from the effect catalogue (`calibrate/effect_catalogue.cpp`): an effect outside it "
+         "that changes these observables the same way, within the noise, could be reported as the catalogue effect "
+         "(or group) it most resembles.";
+    if (r.poor_fit || r.held_out_beyond_noise) o << " Where the fit stays poor, what remains may be such an effect.";
+  }
   if (r.poor_fit)
     o << (r.effects.empty() ? " The fit is poor (chi2 p < 0.01 on the fitted points)."
                             : " The fit is still poor after the additions (chi2 p < 0.01): read any attribution with care.");

@@ -292,7 +292,8 @@ void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std:
   for (double* bound : {&term.lo, &term.hi})
     *bound = c.neutral + valid_offset(c.key, c.neutral, *bound - c.neutral).value_or(0.0);
   if (offsets.empty()) {
-    say_(fmt::format("{}: no more size to measure (each wanted one is measured already or within a quarter step of one)",
+    say_(fmt::format("{}: no more size to measure (each wanted one makes no scenario, is measured already or lies "
+                     "within a quarter step of one)",
                      c.effect));
     return;
   }

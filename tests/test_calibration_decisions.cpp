@@ -403,9 +403,16 @@ TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {
   found.effects.push_back(drag);
   testing::TempDir dir_found("gapflow-calibration-report-found");
   write_calibration_outputs(data, found, dir_found.path(), false);
-  EXPECT_NE(verdict_line(dir_found / "report.md").find("an effect outside it that moves these observables alike"),
+  EXPECT_NE(verdict_line(dir_found / "report.md").find("an effect outside it that changes these observables the same way"),
             std::string::npos)
       << verdict_line(dir_found / "report.md");
+  EXPECT_EQ(verdict_line(dir_found / "report.md").find("what remains may be such an effect"), std::string::npos);
+  found.poor_fit = true;  // a poor fit after the addition: what remains may be outside the catalogue too
+  testing::TempDir dir_poor("gapflow-calibration-report-poor");
+  write_calibration_outputs(data, found, dir_poor.path(), false);
+  EXPECT_NE(verdict_line(dir_poor / "report.md").find("Where the fit stays poor, what remains may be such an effect."),
+            std::string::npos)
+      << verdict_line(dir_poor / "report.md");
 
   const std::optional<std::string> python = find_python_with_matplotlib();
   if (!python) GTEST_SKIP() << "no python3 to parse summary.json";
