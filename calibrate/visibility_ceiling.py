@@ -262,6 +262,9 @@ def main():
         if not 0 < decisive < 0.05:
             print(f"error: --decisive needs an adjusted p in (0, 0.05), not '{decisive_text}'", file=sys.stderr)
             sys.exit(2)
+    if not with_rule1 and (remade is not None or scale_text is not None or decisive_text is not None):
+        print("error: --remade, --scale and --decisive go with --rule-1", file=sys.stderr)
+        sys.exit(2)
     pass_dirs = [a for a in args if a not in ("--by-case", "--rule-1", "--gates")]
     if not pass_dirs:
         print("usage: visibility_ceiling.py [--by-case] [--gates] [--rule-1 [--remade NAME] [--scale K] [--decisive P]] PASS_DIR [PASS_DIR...]", file=sys.stderr)

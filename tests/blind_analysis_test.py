@@ -220,6 +220,7 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn(f"expected identified {doubled:.1f} of 4", out)
         self.assertEqual(run("visibility_ceiling.py", "--rule-1", "--scale", "-1", self.pass_dir)[0], 2)
         self.assertEqual(run("visibility_ceiling.py", "--rule-1", "--decisive", "0.5", self.pass_dir)[0], 2)
+        self.assertEqual(run("visibility_ceiling.py", "--scale", "2", self.pass_dir)[0], 2)  # needs --rule-1
         self.assertGreater(rule1_power(18.0, dof, critical, decisive=1e-3), rule1_power(18.0, dof, critical) + 0.1)
 
     def test_gates_say_where_each_single_effect_was_won_or_lost(self):
