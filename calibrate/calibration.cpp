@@ -166,12 +166,7 @@ class Loop {
     const Reference signature_ref =
         def_.independent_signatures ? responses_.on_own_seeds(baseline, data_.seed + def_.signature_seed_offset) : baseline;
     std::vector<Candidate> cands = responses_.signatures(signature_ref, terms);
-    // Where the next effect's response is measured. In the first round its term already holds the
-    // signature's sizes, so its other sizes are measured against the same unmoved runs: sizes
-    // paired with different runs differ in their noise from one size to the next, and the fit can
-    // find a false well between two of them (blind pass 20's rolling-high, README, Calibration,
-    // item 4, "One seed set per response").
-    std::optional<Reference> reference = signature_ref;
+    std::optional<Reference> reference = baseline;  // where the next effect's response is measured
     for (int round_no = 0; round_no < def_.max_effects; ++round_no) {
       Round round = score_round(cands, state, surface);
       const Candidate* best = round.best.empty() ? nullptr : find(round, round.best);
@@ -316,12 +311,18 @@ class Loop {
                   const Surface& surface, const ModelState& from) {
     Trial t;
     t.surface = surface;
-    if (surface.effects.empty()) {
+    if (surface.effects.empty() && !def_.independent_signatures) {
       EffectTerm term = *std::find_if(signature_terms.begin(), signature_terms.end(),
                                       [&](const EffectTerm& x) { return x.effect == c.effect; });
       responses_.refine(term, c, ref);
       t.surface.effects.push_back(std::move(term));
     } else {
+      // Signatures on seeds of their own serve the score test only. The fitted response is
+      // measured anew against the baseline's runs, all its sizes paired alike: the prediction is
+      // then the surface plus moved minus unmoved runs of the surface's own seeds, in which the
+      // nodes' noise cancels, where the own seeds' pairs add theirs; and sizes paired with
+      // different runs differ in noise from one size to the next, between which the fit found a
+      // false well (blind pass 20's rolling-high; README, Calibration, item 4).
       t.surface.effects.push_back(responses_.measure_term(c, ref));
     }
     const EffectDef& e = *find_effect(c.effect);
