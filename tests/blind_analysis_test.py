@@ -235,6 +235,32 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("  spin-high: 1; 0; 0; 0", out)
         self.assertIn("  rolling-high: 1; 1; 0; 1", out)
 
+    def test_replay_compare_counts_changes_twin_by_twin(self):
+        import shutil
+        replay = Path(self.tmp.name) / "replay"
+        if replay.exists():
+            shutil.rmtree(replay)
+        shutil.copytree(self.pass_dir, replay)
+        with open(replay / "cases.csv", newline="") as f:
+            table = list(csv.DictReader(f))
+        for r in table:  # the replay's drag-low: held-out RMS/noise after the fit 1.0 -> 3.0 (excess 0 -> 2.83)
+            if r["case"] == "drag-low":
+                r["heldout_rms_sigma_after"] = "3.0"
+        with open(replay / "cases.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(table[0].keys()))
+            w.writeheader()
+            w.writerows(table)
+        code, out, _ = run("replay_compare.py", self.pass_dir, replay)
+        self.assertEqual(code, 0)
+        # Found in both: drag-low and rolling-high (through its group; its size is drag's, not the
+        # planted rolling resistance's, so only drag-low has a size error: |2.6 - 3| / 3).
+        self.assertIn("pass: identified 2 of 4; intervals holding the planted value 0 of 1; nulls with an effect added "
+                      "1 of 1; median relative size error 0.133 over 1; held-out excess after the fit, summed over the "
+                      "2 cases found in both, 0.0", out)
+        self.assertIn("held-out excess after the fit, summed over the 2 cases found in both, 2.8", out)
+        self.assertIn("rose in 1, fell in 0, unchanged in 1", out)
+        self.assertEqual(run("replay_compare.py", self.pass_dir)[0], 2)
+
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)
         self.assertEqual(code, 0)
