@@ -320,7 +320,8 @@ class Loop {
       // Signatures on seeds of their own serve the score test only. The fitted response is
       // measured anew against the baseline's runs, all its sizes paired alike: the prediction is
       // then the surface plus moved minus unmoved runs of the surface's own seeds, in which the
-      // nodes' noise cancels, where the own seeds' pairs add theirs; and sizes paired with
+      // nodes' noise largely cancels, where the own seeds' pairs add theirs (pass 20 replayed at
+      // cdf64f9, which paired them so: held-out points after the fit worse in 11 of 16); and sizes paired with
       // different runs differ in noise from one size to the next, between which the fit found a
       // false well (blind pass 20's rolling-high; README, Calibration, item 4).
       t.surface.effects.push_back(responses_.measure_term(c, ref));
