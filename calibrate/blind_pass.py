@@ -1,6 +1,7 @@
 """A blind pass folder (studies/calibration_blind.sh): which calibrations are the pass's own.
 
 Shared by the analysis scripts (blind_summary.py's siblings), so that each counts the same twins."""
+import csv
 import glob
 import os
 import sys
@@ -30,3 +31,29 @@ def take_option(args, name, what):
     value = args[k + 1]
     del args[k:k + 2]
     return value
+
+
+def number_option(args, name, what, valid):
+    """The number after `name` in args (both removed), or None; exit 2 where it is missing, not a
+    number or not `valid`."""
+    text = take_option(args, name, what)
+    if text is None:
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not valid(value):
+        print(f"error: {name} needs {what}, not '{text}'", file=sys.stderr)
+        sys.exit(2)
+    return value
+
+
+def cases_table(folder):
+    """A pass's (or replay's) cases.csv rows (calibrate/blind_summary.py); exit 2 where it has none."""
+    path = os.path.join(folder, "cases.csv")
+    if not os.path.isfile(path):
+        print(f"error: no cases.csv in {folder}", file=sys.stderr)
+        sys.exit(2)
+    with open(path, newline="", encoding="utf-8") as f:
+        return list(csv.DictReader(f))

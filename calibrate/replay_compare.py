@@ -14,23 +14,18 @@ re-score at other fitted values is another draw of the model's noise (12 held-ou
 RMS/noise has a standard deviation of about 0.2), so a single case's change says little; a count
 of rises against falls says more. Exit 2 on a folder without cases.csv.
 """
-import csv
 import json
 import math
 import os
 import statistics
 import sys
 
+from blind_pass import cases_table
 from blind_summary import NOT_SINGLE
 
 
 def rows(folder):
-    path = os.path.join(folder, "cases.csv")
-    if not os.path.isfile(path):
-        print(f"error: no cases.csv in {folder}", file=sys.stderr)
-        sys.exit(2)
-    with open(path, newline="", encoding="utf-8") as f:
-        return {r["case"]: r for r in csv.DictReader(f)}
+    return {r["case"]: r for r in cases_table(folder)}
 
 
 def relative_size_error(folder, truth_folder, row):

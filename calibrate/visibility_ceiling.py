@@ -51,7 +51,6 @@ within the noise (the loop's `--decisive-score P`, off by default): what relaxin
 
     /usr/bin/python3 calibrate/visibility_ceiling.py --rule-1 --remade resignal results/calibration-blind-pass{10,12,13,14,15,16,17,18,19,20}
 """
-import csv
 import json
 import math
 import os
@@ -60,17 +59,12 @@ import sys
 import numpy as np
 from scipy.stats import beta, chi2, norm
 
-from blind_pass import take_option
+from blind_pass import cases_table, number_option, take_option
 from blind_summary import NOT_SINGLE
 
 
 def single_rows(pass_dir):
-    path = os.path.join(pass_dir, "cases.csv")
-    if not os.path.isfile(path):
-        print(f"error: no cases.csv in {pass_dir}", file=sys.stderr)
-        sys.exit(2)
-    with open(path, newline="", encoding="utf-8") as f:
-        return [r for r in csv.DictReader(f) if r["truth"] not in NOT_SINGLE]
+    return [r for r in cases_table(pass_dir) if r["truth"] not in NOT_SINGLE]
 
 
 def clopper_pearson(k, n, level=0.95):
@@ -242,29 +236,15 @@ def main():
     with_rule1 = "--rule-1" in args
     with_gates = "--gates" in args
     remade = take_option(args, "--remade", "a folder name (e.g. resignal)")
-    scale_text = take_option(args, "--scale", "a positive number (the factor on every lambda)")
-    scale = 1.0
-    if scale_text is not None:
-        try:
-            scale = float(scale_text)
-        except ValueError:
-            scale = float("nan")
-        if not (scale > 0 and math.isfinite(scale)):
-            print(f"error: --scale needs a positive number (the factor on every lambda), not '{scale_text}'", file=sys.stderr)
-            sys.exit(2)
-    decisive_text = take_option(args, "--decisive", "an adjusted p (the loop's --decisive-score)")
-    decisive = 0.0
-    if decisive_text is not None:
-        try:
-            decisive = float(decisive_text)
-        except ValueError:
-            decisive = float("nan")
-        if not 0 < decisive < 0.05:
-            print(f"error: --decisive needs an adjusted p in (0, 0.05), not '{decisive_text}'", file=sys.stderr)
-            sys.exit(2)
-    if not with_rule1 and (remade is not None or scale_text is not None or decisive_text is not None):
+    scale = number_option(args, "--scale", "a positive number (the factor on every lambda)",
+                          lambda v: v > 0 and math.isfinite(v))
+    decisive = number_option(args, "--decisive", "an adjusted p in (0, 0.05) (the loop's --decisive-score)",
+                             lambda v: 0 < v < 0.05)
+    if not with_rule1 and (remade is not None or scale is not None or decisive is not None):
         print("error: --remade, --scale and --decisive go with --rule-1", file=sys.stderr)
         sys.exit(2)
+    scale = 1.0 if scale is None else scale
+    decisive = 0.0 if decisive is None else decisive
     pass_dirs = [a for a in args if a not in ("--by-case", "--rule-1", "--gates")]
     if not pass_dirs:
         print("usage: visibility_ceiling.py [--by-case] [--gates] [--rule-1 [--remade NAME] [--scale K] [--decisive P]] PASS_DIR [PASS_DIR...]", file=sys.stderr)
