@@ -304,9 +304,10 @@ class Loop {
     return t;
   }
 
-  // The candidate's response measured at the reference (at the baseline: its signature's term,
-  // measured there, with the refinement sizes; with effects added: every size measured anew with
-  // them), fitted jointly with everything in `surface` from `from`.
+  // The candidate's response measured at the reference (at the baseline with shared signatures:
+  // its signature's term with the refinement sizes; with the signatures on seeds of their own, or
+  // with effects added: every size measured anew), fitted jointly with everything in `surface`
+  // from `from`.
   Trial fit_trial(const Candidate& c, const std::vector<EffectTerm>& signature_terms, const Reference& ref,
                   const Surface& surface, const ModelState& from) {
     Trial t;
@@ -317,13 +318,12 @@ class Loop {
       responses_.refine(term, c, ref);
       t.surface.effects.push_back(std::move(term));
     } else {
-      // Signatures on seeds of their own serve the score test only. The fitted response is
-      // measured anew against the baseline's runs, all its sizes paired alike: the prediction is
-      // then the surface plus moved minus unmoved runs of the surface's own seeds, in which the
-      // nodes' noise largely cancels, where the own seeds' pairs add theirs (pass 20 replayed at
-      // cdf64f9, which paired them so: held-out points after the fit worse in 11 of 16); and sizes paired with
-      // different runs differ in noise from one size to the next, between which the fit found a
-      // false well (blind pass 20's rolling-high; README, Calibration, item 4).
+      // Signatures on seeds of their own serve the score, the visibility and the step; the
+      // fitted response is measured anew against the baseline's runs, all its sizes paired alike
+      // (until 667bb64 the signature's own-seed sizes were kept beside baseline-paired ones).
+      // Baseline pairing largely cancels the nodes' noise in the prediction, but shares it with the
+      // residual in the linearised size (effect_responses.hpp, "Shared noise"); pass 20 replayed
+      // (not blind) did not tell this from pairing every size with the own seeds (cdf64f9).
       t.surface.effects.push_back(responses_.measure_term(c, ref));
     }
     const EffectDef& e = *find_effect(c.effect);

@@ -37,8 +37,12 @@
 // collisions, so common random numbers cancel little of it). Then E[g.r] > 0 on a correct
 // model: every score leans toward its step, most for the weak signatures, and the test rejects
 // too often. On seeds of their own (the default) the signatures' moved and unmoved runs are made
-// there; the refinement sizes of an effect about to be fitted stay paired with the nodes' runs
-// on the baseline's seeds (each size is paired within itself, so the term may mix the two).
+// there, and they serve the score, the visibility and the choice of step; the response an effect
+// is fitted with is measured anew against the nodes' runs on the baseline's seeds (667bb64;
+// until then the signature's sizes were kept and the others added on the baseline's seeds, a
+// term of mixed pairing). Whether the fit is better so or with every size on the own seeds is
+// open: the baseline's pairing largely cancels the nodes' noise in the prediction, and it brings
+// the same shared noise into the linearised size the fit finds (README, Calibration, item 4).
 #pragma once
 
 #include "calibrate/calibration.hpp"

@@ -255,8 +255,8 @@ class BlindAnalysis(unittest.TestCase):
         # Found in both: drag-low and rolling-high (through its group; its size is drag's, not the
         # planted rolling resistance's, so only drag-low has a size error: |2.6 - 3| / 3).
         self.assertIn("pass: identified 2 of 4; intervals holding the planted value 0 of 1; nulls with an effect added "
-                      "1 of 1; median relative size error 0.133 over 1; held-out excess after the fit, summed over the "
-                      "2 cases found in both, 0.0", out)
+                      "1 of 1; median relative size error 0.133 over 1 (of the planted departure from neutral; 0.133 of the "
+                      "planted value); held-out excess after the fit, summed over the 2 cases found in both, 0.0", out)
         self.assertIn("held-out excess after the fit, summed over the 2 cases found in both, 2.8", out)
         self.assertIn("rose in 1, fell in 0, unchanged in 1", out)
         self.assertEqual(run("replay_compare.py", self.pass_dir)[0], 2)
