@@ -25,8 +25,9 @@
 // only the candidates about to be fitted are measured there: which ones those are
 // is still decided on the signatures measured at the baseline (re-measuring all ten
 // would cost a second signature batch, ~2000 runs).
-// A later round's term has the step and the refinement sizes, not the range's-end
-// look a weak signature got in the first round.
+// A term measured anew (a later round's, or the first round's with the signatures on seeds of
+// their own) has the step and the refinement sizes only, not the first step beside the range's
+// end that a weak signature's own term holds.
 //
 // Shared noise (CalibrationDef::independent_signatures: on by default from blind pass 19's
 // decision; --shared-signatures pairs with the baseline's runs, as every pass up to 18). The score test
