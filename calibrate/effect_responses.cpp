@@ -300,9 +300,8 @@ void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std:
   std::vector<ParameterSet> sets;
   for (double da : offsets)
     for (const ParameterSet& n : at.nodes) sets.push_back(n.with(c.key, c.neutral + da));
-  say_(fmt::format("{}: response measured at {} {}size(s) ({}) at {} node(s){}", c.effect, offsets.size(),
-                   term.offsets.size() > 1 ? "more " : "", fmt::join(offsets, ", "), at.nodes.size(),
-                   at.seed ? fmt::format(", on the signatures' seeds (base seed {})", *at.seed) : ""));
+  say_(fmt::format("{}: response measured at {} {}size(s) ({}) at {} node(s)", c.effect, offsets.size(),
+                   term.offsets.size() > 1 ? "more " : "", fmt::join(offsets, ", "), at.nodes.size()));
   const std::vector<Prediction> moved = evaluate_at(at, sets);
   for (std::size_t k = 0; k < offsets.size(); ++k) {
     std::vector<double> shift, se;

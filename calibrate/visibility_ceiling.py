@@ -51,6 +51,7 @@ within the noise (the loop's `--decisive-score P`, off by default): what relaxin
 
     /usr/bin/python3 calibrate/visibility_ceiling.py --rule-1 --remade resignal results/calibration-blind-pass{10,12,13,14,15,16,17,18,19,20}
 """
+import collections
 import json
 import math
 import os
@@ -86,10 +87,14 @@ def counts(pass_dir):
     }
 
 
+# One single-effect twin's first round: rule 1's chi^2 gate passed (the fitted points' chi^2 p < alpha
+# at the baseline); the planted effect's own score significant (visible, adjusted p < alpha);
+# identified; the best visible score's adjusted p, and whether that best is the planted effect.
+Gates = collections.namedtuple("Gates", "case gate planted identified best_p best_is_planted")
+
+
 def first_round_gates(pass_dir, alpha=0.05):
-    """Per single-effect twin, from its calibration's summary.json: (case, rule 1's chi^2 gate passed
-    (the fitted points' chi^2 p < alpha at the baseline), the planted effect's own first-round score
-    significant (visible, adjusted p < alpha), identified)."""
+    """Per single-effect twin, from its calibration's summary.json: its Gates."""
     out = []
     for r in single_rows(pass_dir):
         path = os.path.join(pass_dir, r["case"], "summary.json")
@@ -103,38 +108,38 @@ def first_round_gates(pass_dir, alpha=0.05):
         planted = any(c["effect"] == r["truth"] and c["visible"] and c["p_adjusted"] < alpha for c in first)
         visible = [c for c in first if c["visible"]]
         best = min(visible, key=lambda c: c["p_adjusted"]) if visible else None
-        out.append((r["case"], gate, planted, r["identified"] == "True",
-                    (best["p_adjusted"], best["effect"] == r["truth"]) if best else (1.0, False)))
+        out.append(Gates(r["case"], gate, planted, r["identified"] == "True",
+                         best["p_adjusted"] if best else 1.0, best is not None and best["effect"] == r["truth"]))
     return out
 
 
 def gates_report(pass_dirs, with_cases):
     rows = [row for pass_dir in pass_dirs for row in first_round_gates(pass_dir)]
     n = len(rows)
-    passed = [r for r in rows if r[1]]
-    stopped = [r for r in rows if not r[1]]
-    both = [r for r in passed if r[2]]
+    passed = [r for r in rows if r.gate]
+    stopped = [r for r in rows if not r.gate]
+    both = [r for r in passed if r.planted]
     print(f"first round, single effects ({n}): rule 1's chi^2 gate passed in {len(passed)} "
           f"({100 * len(passed) / n:.0f} %), and in those the planted effect's score significant in {len(both)}; "
-          f"identified {sum(r[3] for r in rows)}: {sum(r[3] for r in both)} of the {len(both)}, "
-          f"{sum(r[3] for r in passed if not r[2])} of the {len(passed) - len(both)} others past the gate, "
-          f"{sum(r[3] for r in stopped)} of the {len(stopped)} stopped at it "
-          f"({sum(r[2] for r in stopped)} of those with the planted score significant)")
+          f"identified {sum(r.identified for r in rows)}: {sum(r.identified for r in both)} of the {len(both)}, "
+          f"{sum(r.identified for r in passed if not r.planted)} of the {len(passed) - len(both)} others past the gate, "
+          f"{sum(r.identified for r in stopped)} of the {len(stopped)} stopped at it "
+          f"({sum(r.planted for r in stopped)} of those with the planted score significant)")
     # What the decisive-score route (--decisive-score P: the best score tried where the chi^2 is
     # within the noise) would have tried among the twins stopped at the gate, and how often the
     # planted effect was that best score.
     for p in (1e-4, 1e-3, 1e-2):
-        tried = [r for r in stopped if r[4][0] < p]
+        tried = [r for r in stopped if r.best_p < p]
         print(f"  stopped at the gate with the best score's adjusted p < {p:g}: {len(tried)} "
-              f"(the planted effect that best score in {sum(r[4][1] for r in tried)})")
+              f"(the planted effect that best score in {sum(r.best_is_planted for r in tried)})")
     if with_cases:
         cases = {}
-        for case, gate, planted, identified, _ in rows:
-            c = cases.setdefault(case, [0, 0, 0, 0])
+        for r in rows:
+            c = cases.setdefault(r.case, [0, 0, 0, 0])
             c[0] += 1
-            c[1] += gate
-            c[2] += gate and planted
-            c[3] += identified
+            c[1] += r.gate
+            c[2] += r.gate and r.planted
+            c[3] += r.identified
         print("case: twins; chi^2 gate passed; and the planted score significant; identified")
         for name, (k, g, gp, i) in sorted(cases.items(), key=lambda item: (item[1][3] - item[1][0], item[0])):
             print(f"  {name}: {k}; {g}; {gp}; {i}")
@@ -177,7 +182,7 @@ def rule1_chances(pass_dir, remade=None, scale=1.0, decisive=0.0):
         with open(path, encoding="utf-8") as f:
             t = json.load(f)
         sig = t.get("signal") or {}
-        if not sig.get("chi2") and sig.get("chi2") != 0:
+        if sig.get("chi2") is None:  # no oracle for this twin: nothing it could see
             out.append(0.0)
             continue
         free = sum(1 for v in t["planted"] if v["name"] == "free")

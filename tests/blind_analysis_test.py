@@ -233,6 +233,10 @@ class BlindAnalysis(unittest.TestCase):
                       "in 1; identified 2: 1 of the 1, 1 of the 1 others past the gate, 0 of the 2 stopped at it "
                       "(1 of those with the planted score significant)", out)
         self.assertIn("  spin-high: 1; 0; 0; 0", out)
+        # Of the two stopped at the gate, spin-high's best score (its own, adjusted p 2e-4) would be tried
+        # by a decisive-score route at 1e-3 and 1e-2, not at 1e-4; rolling-low has no first round.
+        self.assertIn("stopped at the gate with the best score's adjusted p < 0.0001: 0 (the planted effect that best score in 0)", out)
+        self.assertIn("stopped at the gate with the best score's adjusted p < 0.001: 1 (the planted effect that best score in 1)", out)
         self.assertIn("  rolling-high: 1; 1; 0; 1", out)
 
     def test_replay_compare_counts_changes_twin_by_twin(self):
