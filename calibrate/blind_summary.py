@@ -173,6 +173,10 @@ def main(out):
     seeds_text = ("every twin its own model seed (1000 x its seed), so the twins are independent draws of the model's noise"
                   if model_seeds == "per-twin" else
                   "every twin the design's model seed, so every calibration fits one draw of the model's noise")
+    # The runs averaged into each twin's data point (recorded from pass 22 on; before, 10).
+    replicates_file = out / "twin_replicates"
+    twin_replicates = int(replicates_file.read_text()) if replicates_file.exists() else 10
+    seeds_text = f"data of {twin_replicates} runs per point; " + seeds_text
     if own_signatures == len(rows):
         seeds_text += "; the signatures on seeds of their own"
     elif own_signatures == 0:

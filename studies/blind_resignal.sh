@@ -37,6 +37,8 @@ seed_offset=$(cat "$pass/seed_offset")
 design=${DESIGN:-$(cat "$pass/design")}
 model_seeds=design   # a pass without the record used the design's model seed
 [[ -f $pass/model_seeds ]] && model_seeds=$(cat "$pass/model_seeds")
+twin_replicates=10   # the runs per data point of every pass without the record (up to 21)
+[[ -f $pass/twin_replicates ]] && twin_replicates=$(cat "$pass/twin_replicates")
 # What may differ between the pass's twin and the remade one: the scenario line (a committed pass
 # rewrites it), and with another design its name (first line, description) and the model's replicates
 # (the first `replicates =` line; the points' own come after it).
@@ -55,7 +57,7 @@ echo "$blind_cases" | while read -r id model seed planted; do
   if [[ ! -f $out/truth/$id.json ]]; then
     echo "== twin $id" >&2
     "$gapflow" twin "$design" --out "$out/twins/$id.toml" --truth "$out/truth/$id.json.part" --model "$model" \
-      --seed $((seed + seed_offset)) --replicates 10 --name "$id" --jobs "$jobs" --db "$store" "${twin_options[@]}" \
+      --seed $((seed + seed_offset)) --replicates "$twin_replicates" --name "$id" --jobs "$jobs" --db "$store" "${twin_options[@]}" \
       "${seed_options[@]}" >&2
     if ! diff <(comparable "$pass/twins/$id.toml") <(comparable "$out/twins/$id.toml") > /dev/null; then
       echo "error: the remade $id differs from $pass/twins/$id.toml: not the pass's twin" >&2

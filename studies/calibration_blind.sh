@@ -4,9 +4,14 @@
 # the 2D model; then the summary (confusion matrix, interval coverage, null
 # false-positive rate, held-out error before/after) in OUT/report.md.
 #
-#   [MODEL_SEEDS=per-twin|design] studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN] [CALIBRATE OPTIONS...]
+#   [MODEL_SEEDS=per-twin|design] [TWIN_REPLICATES=N] studies/calibration_blind.sh [OUT] [JOBS] [SEED_OFFSET] [DESIGN] [CALIBRATE OPTIONS...]
 #       (default results/calibration-blind, all cores, offset 0, data/blind/design.toml; options
 #       after DESIGN go to every `gapflow calibrate`, e.g. --decisive-score 1e-4)
+#
+# TWIN_REPLICATES (default 10, every pass up to 21): the runs averaged into each twin's data point,
+# its "measured" replicate count. 20 is the paper's own protocol ("Each simulation is performed 20
+# times", Murray et al. 2016, the model section). It sets the data's noise only; the calibration's
+# model replicates are the design's [model] replicates.
 #
 # SEED_OFFSET is added to every case's seed: another offset draws another set of twins (other
 # sizes, other data noise) for the same cases, to test rules chosen after seeing one set on
@@ -34,6 +39,7 @@ gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 design=${4:-data/blind/design.toml}
 calibrate_options=("${@:5}")
 model_seeds=${MODEL_SEEDS:-per-twin}
+twin_replicates=${TWIN_REPLICATES:-10}
 # What an OUT was made with is recorded in it, and a run with other settings is refused (exit 2)
 # before anything is written: twins and summaries of one setting are never mixed with another's.
 # recorded FILE BEFORE: FILE's content; for an OUT with twins and no record (made before the
@@ -52,11 +58,17 @@ if [[ $model_seeds != design && $model_seeds != per-twin ]]; then
   echo "error: MODEL_SEEDS is '$model_seeds'; allowed: per-twin, design" >&2
   exit 2
 fi
+if [[ ! $twin_replicates =~ ^[0-9]{1,4}$ ]] || (( 10#$twin_replicates < 2 || 10#$twin_replicates > 1000 )); then
+  echo "error: TWIN_REPLICATES is '$twin_replicates'; allowed: a whole number of runs from 2 to 1000" >&2
+  exit 2
+fi
+twin_replicates=$((10#$twin_replicates))
 [[ -f $design ]] || { echo "error: no design file $design" >&2; exit 2; }
 design=$(realpath --relative-to=. "$design")
 refuse_other "seed offset" "$(recorded seed_offset 0)" "$seed_offset"
 refuse_other design "$(recorded design data/blind/design.toml)" "$design"
 refuse_other MODEL_SEEDS "$(recorded model_seeds design)" "$model_seeds"
+refuse_other TWIN_REPLICATES "$(recorded twin_replicates 10)" "$twin_replicates"
 # The calibrations' options matter once one has run (an OUT without a record ran with none).
 options_text="${calibrate_options[*]}"
 if compgen -G "$out/*/summary.json" > /dev/null; then
@@ -72,6 +84,7 @@ echo "$seed_offset" > "$out/seed_offset"
 echo "$design" > "$out/design"
 echo "$options_text" > "$out/calibrate_options"
 echo "$model_seeds" > "$out/model_seeds"
+echo "$twin_replicates" > "$out/twin_replicates"
 
 # The cases (id, model, seed, planted): studies/blind_cases.sh.
 source studies/blind_cases.sh
@@ -86,7 +99,7 @@ echo "$blind_cases" | while read -r id model seed planted; do
     model_seed_options "$model_seeds" "$seed"
     echo "== twin $id ($model, seed $seed): ${planted:-nothing planted}" >&2
     "$gapflow" twin "$design" --out "$twin" --truth "$out/truth/$id.json" --model "$model" --seed "$seed" \
-      --replicates 10 --name "$id" --jobs "$jobs" --db "$out/twin_runs.sqlite" "${twin_options[@]}" \
+      --replicates "$twin_replicates" --name "$id" --jobs "$jobs" --db "$out/twin_runs.sqlite" "${twin_options[@]}" \
       "${seed_options[@]}"
   fi
   if [ ! -f "$out/$id/summary.json" ]; then

@@ -29,7 +29,9 @@ if [[ -d $dir ]]; then
 else
   mkdir -p "$dir"
   cp -r "$pass/truth" "$pass/design" "$pass/seed_offset" "$dir/"   # what the summary reads
-  if [[ -f $pass/model_seeds ]]; then cp "$pass/model_seeds" "$dir/"; fi
+  for f in model_seeds twin_replicates; do
+    if [[ -f $pass/$f ]]; then cp "$pass/$f" "$dir/"; fi
+  done
   cp "$pass/runs.sqlite" "$dir/runs.sqlite.partial" && mv "$dir/runs.sqlite.partial" "$dir/runs.sqlite"
   echo "$made_by" > "$dir/replay.made_by"
 fi

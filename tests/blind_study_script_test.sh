@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # studies/calibration_blind.sh, blind_resignal.sh and score_lean_replay.sh with a stand-in gapflow
 # (~15 s): which model seed each twin is given (MODEL_SEEDS=per-twin, the default: 1000 x its seed;
-# design: none, so the design's), that an OUT made with one setting (or before the record, as
+# design: none, so the design's), how many runs each twin's data point averages (TWIN_REPLICATES), that an OUT made with one setting (or before the record, as
 # pass 19's) refuses the other before writing anything (exit 2), that a
 # resume makes and calibrates nothing again, that the summary says which draw the pass fits, and
 # that studies/score_lean_replay.sh replays with the other setting of --independent-signatures, and
@@ -63,6 +63,14 @@ done <<< "$blind_cases"
 [[ $(grep -c '^calibrate ' "$work/log") == "$cases" ]] || fail "not $cases calibrations"
 grep -q "every twin its own model seed" "$work/own/report.md" || fail "the summary does not say the seeds are per twin"
 grep -q "the signatures on seeds of their own" "$work/own/report.md" || fail "the summary does not say the signatures' seeds"
+[[ $(grep -c -- '^twin .* --replicates 10 ' "$work/log") == "$cases" ]] || fail "the twins' data are not of 10 runs by default"
+grep -q "data of 10 runs per point" "$work/own/report.md" || fail "the summary does not say the data's runs per point"
+
+# TWIN_REPLICATES sets the runs in each twin's data point, and says so in the summary.
+: > "$work/log"
+TWIN_REPLICATES=20 blind "$work/twenty" 1 16000 $design || fail "TWIN_REPLICATES=20: $(cat "$work/stderr")"
+[[ $(grep -c -- '^twin .* --replicates 20 ' "$work/log") == "$cases" ]] || fail "TWIN_REPLICATES=20 did not reach every twin"
+grep -q "data of 20 runs per point" "$work/twenty/report.md" || fail "the summary does not say 20 runs per point"
 
 MODEL_SEEDS=design blind "$work/shared" 1 16000 $design || fail "design-seed pass: $(cat "$work/stderr")"
 if grep -q -- "--model-seed" <(grep "shared/twins" "$work/log"); then fail "MODEL_SEEDS=design gave a model seed"; fi
@@ -84,6 +92,16 @@ grep -q "allowed: per-twin, design" "$work/stderr" || fail "no clear error: $(ca
 [[ ! -e $work/new ]] || fail "a refused run left $work/new behind"
 [[ ! -s $work/log ]] || fail "a refused run ran gapflow: $(head -1 "$work/log")"
 [[ $(cat "$work/own/model_seeds") == per-twin ]] || fail "a refused run changed the record"
+set +e
+TWIN_REPLICATES=20 blind "$work/own" 1 16000 $design; rc_replicates=$?
+grep -q "made with TWIN_REPLICATES 10, not 20" "$work/stderr" || fail "no clear error for other replicates: $(cat "$work/stderr")"
+TWIN_REPLICATES=1 blind "$work/new" 1 16000 $design; rc_one=$?
+grep -q "TWIN_REPLICATES is '1'; allowed: a whole number of runs from 2 to 1000" "$work/stderr" || fail "no clear error for 1 run: $(cat "$work/stderr")"
+TWIN_REPLICATES=ten blind "$work/new" 1 16000 $design; rc_word=$?
+set -e
+[[ $rc_replicates == 2 && $rc_one == 2 && $rc_word == 2 ]] || fail "bad or other replicates: exits $rc_replicates $rc_one $rc_word"
+[[ ! -e $work/new && ! -s $work/log ]] || fail "a refused TWIN_REPLICATES ran or wrote"
+[[ $(cat "$work/own/twin_replicates") == 10 ]] || fail "a refused run changed the replicates' record"
 
 # A pass folder from before the record (twins, no model_seeds) used the design's seed: the default
 # (per-twin) is refused there, and nothing of it changes.
@@ -101,6 +119,10 @@ grep -q "made with MODEL_SEEDS design, not per-twin" "$work/stderr" || fail "no 
   > /dev/null 2> "$work/stderr" || true
 grep -q -- "--model-seed 16111000" "$work/log" || fail "blind_resignal.sh did not remake rolling-low with its model seed"
 if grep -q "differs from" "$work/stderr"; then fail "the remade twin differs: $(cat "$work/stderr")"; fi
+: > "$work/log"
+"$src/studies/blind_resignal.sh" "$work/twenty" "$work/resignal-twenty" "$work/none.sqlite" 1 rolling-low \
+  > /dev/null 2> "$work/stderr" || true
+grep -q -- "--replicates 20 " "$work/log" || fail "blind_resignal.sh did not remake a TWIN_REPLICATES=20 twin of 20 runs"
 # A replay of the nulls toggles the signatures' setting, read from the pass's calibrations (a pass
 # without either flag ran its binary's default), and keeps the pass's other options. The passes above
 # ran on the new stand-in (own seeds by default): replayed shared.
