@@ -508,7 +508,8 @@ namespace {
 // The model's share of the variance above which its replicates, not the data, hold the loop's tests
 // back. A planted effect's visibility scales as 1 - share of what a noiseless model would give:
 // at 20 % the model costs a fifth. Blind pass 15 at 6 model replicates identified 15 of 18 single
-// effects, at 12 all 18 (README, Calibration, with the shares measured over its twins).
+// effects, at 12 all 18 when replayed (in-sample); the fresh pass 17 at 12 identified 15 of 18
+// (calibrate/README.md, "The model's own noise is part of every test", with the shares).
 constexpr double kModelNoiseShareNote = 0.2;
 
 // The count that would bring `share` down to `target` if the model's variance fell as 1/replicates.

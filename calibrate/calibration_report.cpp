@@ -64,7 +64,7 @@ void write_detectability_md(std::ostream& o, const CalibrationResult& r) {
       "smaller departure passes these tests less often (about half the time at 0.8 times the bound); a larger one "
       "can still be missed, because the effect must then lower BIC, keep the held-out points and win against its "
       "rivals, and because an effect that interacts with the fitted parameters can be absorbed by a large move of "
-      "them, which this linear view cannot see (README, Calibration, item 7: in a blind twin a rolling resistance "
+      "them, which this linear view cannot see (calibrate/README.md, step 7: in a blind twin a rolling resistance "
       "at twice its bound went unseen). A verdict 'consistent with noise' therefore does not exclude departures "
       "above these sizes either.\n\n| effect | neutral | smallest detectable departure, at best |\n|---|---|---|\n",
       r.alpha);

@@ -43,7 +43,7 @@
 // until then the signature's sizes were kept and the others added on the baseline's seeds, a
 // term of mixed pairing). Whether the fit is better so or with every size on the own seeds is
 // open: the baseline's pairing largely cancels the nodes' noise in the prediction, and it brings
-// the same shared noise into the linearised size the fit finds (README, Calibration, item 4).
+// the same shared noise into the linearised size the fit finds (calibrate/README.md, step 4).
 #pragma once
 
 #include "calibrate/calibration.hpp"

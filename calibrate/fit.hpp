@@ -40,7 +40,7 @@ std::vector<double> whitened_residual(const DataFile& data, const Prediction& p)
 // residual by both: where the model's share is large, its own noise, not the data's, limits what
 // the loop can tell (blind pass 15's twins, data of 10 runs: median 31 % at 6 model replicates, 23 %
 // at 12). Lowering it did not by itself identify more: 15 of 18 on fresh twins at 12 (blind pass 17;
-// README, Calibration).
+// calibrate/README.md, "The model's own noise is part of every test").
 double model_noise_share(const DataFile& data, const Prediction& p);
 // chi^2 over the fitted (or held-out) points; an invalid model point counts as 10 sigma.
 double chi2_of(const DataFile& data, const Prediction& p, bool held_out = false);

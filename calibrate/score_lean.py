@@ -8,7 +8,7 @@ On a null twin (no effect planted: folders null-*) the model is right, so each v
 linearised size (summary.json rounds[0].candidates[].estimate, in the effect's units) points toward its
 step or away from it with equal chance, and the smallest Bonferroni-adjusted p of a round is below x
 in at most a share x of the nulls. A score that shares noise with the residual leans toward the step
-(README, Calibration, item 3; calibrate/effect_responses.hpp, "Shared noise"). Prints, pooled over the
+(calibrate/README.md, step 3; calibrate/effect_responses.hpp, "Shared noise"). Prints, pooled over the
 passes given: per candidate, how many of its sizes point toward the step; in all; and how many nulls
 have their best adjusted p below 0.001, 0.01, 0.05, 0.1 and 0.2. With --all, every twin is read, not
 only the nulls (planted effects lean toward their own steps by design: a check of the script, not of

@@ -123,8 +123,8 @@ std::string surface_noise_text(const SurfaceNoiseCheck& c) {
   if (c.by_observable.size() > 1) s += fmt::format("; by observable: {}", fmt::join(parts, ", "));
   if (!high.empty())
     s += fmt::format(". Above {:.1f} x ({}): the same seeds at every node keep those replicates correlated between "
-                     "nodes, and the loop's tests take the model's noise there as smaller than it is (README, "
-                     "Calibration, limits)",
+                     "nodes, and the loop's tests take the model's noise there as smaller than it is (calibrate/"
+                     "README.md, \"The model's own noise is part of every test\")",
                      kUnderstatedNote, fmt::join(high, ", "));
   return s;
 }

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Why the model's noise at the baseline fell less than 1/replicates (README, Calibration).
+"""Why the model's noise at the baseline fell less than 1/replicates (calibrate/README.md, "The model's own noise is part of every test").
 
 The loop predicts each point through a quadratic in the free parameter, fitted through the 5 grid
 nodes around the best node by chi^2 and weighted by each node's own standard error, estimated

@@ -369,8 +369,8 @@ TEST(CalibrationSynthetic, TheHeldOutRouteTriesNothingOnANullTwinWithoutASignifi
 // decides, draws the fit toward a measured size). Blind passes 9-13 missed 31 of their recovered
 // sizes' intervals, every one toward neutral; this says the cause is not in the fit's structure
 // (surface, response interpolation, re-measurement). With the model's noise,
-// SizeBiasAgainstModelNoise (below) finds a pull of about 3-4 % over 24 twins (README, "Calibration",
-// limits).
+// SizeBiasAgainstModelNoise (below) finds a pull of about 3-4 % over 24 twins
+// (calibrate/README.md, "Why sizes come out toward neutral").
 TEST(CalibrationSynthetic, WithoutNoiseAPlantedDragIsRecoveredWithinOneAndAHalfPercent) {
   const NoiseScope quiet({1e-4, 1e-4});
   TempDir dir("gapflow_calibration_synthetic_noiseless");
@@ -412,7 +412,7 @@ TEST(CalibrationSynthetic, TheFirstEffectsResponseIsMeasuredAgainstTheBaselinesR
 // GAPFLOW_SEEDS (twins, default 8), GAPFLOW_MODEL_SEED (fixed: the calibration's model runs on base
 // seed 1 for every twin, so the twins share one draw of the model's noise; per-twin: seed 100 + the
 // twin's: each twin its own draw of the model's noise, what a bias needs; default per-twin).
-// README, "Calibration", limits: the numbers it gave.
+// calibrate/README.md, "Why sizes come out toward neutral": the numbers it gave.
 //   GAPFLOW_SEEDS=3 build/tests/gapflow_tests --gtest_also_run_disabled_tests --gtest_filter='*SizeBias*'
 TEST(CalibrationSynthetic, DISABLED_SizeBiasAgainstModelNoise) {
   const std::string own_in = text_knob("GAPFLOW_OWN_NOISE_IN", "all");
