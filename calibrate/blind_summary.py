@@ -85,6 +85,7 @@ def main(out):
     out = Path(out)
     rows = []
     own_signatures = 0  # calibrations whose signatures ran on seeds of their own (summary.json; absent: shared)
+    data_runs = set()  # runs per data point, as each twin's truth records them
     for truth_file in sorted((out / "truth").glob("*.json")):
         case = truth_file.stem
         summary_file = out / case / "summary.json"
@@ -93,6 +94,8 @@ def main(out):
         truth = json.load(open(truth_file))
         summary = json.load(open(summary_file))
         own_signatures += summary.get("independent_signatures", False) is True
+        if "replicates" in truth:
+            data_runs.add(truth["replicates"])
         label, planted = truth_label(truth)
         verdict, added = said(summary)
         found = []
@@ -173,10 +176,15 @@ def main(out):
     seeds_text = ("every twin its own model seed (1000 x its seed), so the twins are independent draws of the model's noise"
                   if model_seeds == "per-twin" else
                   "every twin the design's model seed, so every calibration fits one draw of the model's noise")
-    # The runs averaged into each twin's data point (recorded from pass 22 on; before, 10).
+    # The runs averaged into each twin's data point: as the twins' truth files record them, else as
+    # the script recorded them (from pass 22 on), else 10 (every pass before).
     replicates_file = out / "twin_replicates"
-    twin_replicates = int(replicates_file.read_text()) if replicates_file.exists() else 10
-    seeds_text = f"data of {twin_replicates} runs per point; " + seeds_text
+    recorded = replicates_file.read_text().strip() if replicates_file.exists() else ""
+    if data_runs:
+        runs_text = " or ".join(str(n) for n in sorted(data_runs))
+    else:
+        runs_text = recorded or "10"
+    seeds_text = f"data of {runs_text} runs per point; " + seeds_text
     if own_signatures == len(rows):
         seeds_text += "; the signatures on seeds of their own"
     elif own_signatures == 0:

@@ -9,9 +9,10 @@
 #       after DESIGN go to every `gapflow calibrate`, e.g. --decisive-score 1e-4)
 #
 # TWIN_REPLICATES (default 10, every pass up to 21): the runs averaged into each twin's data point,
-# its "measured" replicate count. 20 is the paper's own protocol ("Each simulation is performed 20
-# times", Murray et al. 2016, the model section). It sets the data's noise only; the calibration's
-# model replicates are the design's [model] replicates.
+# its "measured" replicate count. It sets the data's noise only; the calibration's model replicates
+# are the design's [model] replicates. Less noise makes every planted effect easier to see, so a
+# pass's counts hold for its data count only. (Murray et al. 2016 ran each of their simulations 20
+# times; they give no repeat count for their experiments.)
 #
 # SEED_OFFSET is added to every case's seed: another offset draws another set of twins (other
 # sizes, other data noise) for the same cases, to test rules chosen after seeing one set on
@@ -58,7 +59,7 @@ if [[ $model_seeds != design && $model_seeds != per-twin ]]; then
   echo "error: MODEL_SEEDS is '$model_seeds'; allowed: per-twin, design" >&2
   exit 2
 fi
-if [[ ! $twin_replicates =~ ^[0-9]{1,4}$ ]] || (( 10#$twin_replicates < 2 || 10#$twin_replicates > 1000 )); then
+if [[ ! $twin_replicates =~ ^0*[0-9]{1,4}$ ]] || (( 10#$twin_replicates < 2 || 10#$twin_replicates > 1000 )); then
   echo "error: TWIN_REPLICATES is '$twin_replicates'; allowed: a whole number of runs from 2 to 1000" >&2
   exit 2
 fi

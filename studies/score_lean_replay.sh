@@ -4,8 +4,8 @@
 # options kept), on a copy of the
 # pass's store: the same twins and seeds, so the baseline and its runs are the pass's, and only the
 # signatures' runs differ. Not blind: a check on the simulator of whether the first round's scores
-# lean toward the effects' steps because the signatures shared the baseline nodes' runs (README,
-# Calibration, item 3); on a pass with a model seed per twin (MODEL_SEEDS=per-twin) each null is its
+# lean toward the effects' steps because the signatures shared the baseline nodes' runs
+# (calibrate/README.md, step 3); on a pass with a model seed per twin (MODEL_SEEDS=per-twin) each null is its
 # own draw of the model's noise, and the two settings are compared on the same draws. Writes
 # OUT/<case>/ (report, summary.json, log) and prints calibrate/score_lean.py for the pass's own
 # calibrations of those cases and for OUT's. Resumable (finished cases kept; OUT/runs.sqlite, the

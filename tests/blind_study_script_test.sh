@@ -28,18 +28,22 @@ own_seeds=false
 [[ ${STUB_BINARY:-new} == new ]] && own_seeds=true
 [[ $* == *--independent-signatures* ]] && own_seeds=true
 [[ $* == *--shared-signatures* ]] && own_seeds=false
-out="" truth="" model_seed=1
+out="" truth="" model_seed=1 replicates=10
 while [[ $# -gt 0 ]]; do
   case $1 in
     --out) out=$2; shift ;;
     --truth) truth=$2; shift ;;
     --model-seed) model_seed=$2; shift ;;
+    --replicates) replicates=$2; shift ;;
   esac
   shift
 done
 if [[ $command == twin ]]; then
   printf '[model]\nscenario = "x.toml"\nseed = %s\n' "$model_seed" > "$out"
-  printf '{"twin": "t", "model": "2d", "seed": 1, "planted": [{"name": "free", "key": "k", "value": 0.3, "neutral": null}], "measured": {}}\n' > "$truth"
+  # The new stand-in's truth records the data's runs per point, as gapflow twin's does; the old one's not.
+  runs_field=""
+  [[ ${STUB_BINARY:-new} == new ]] && runs_field=", \"replicates\": $replicates"
+  printf '{"twin": "t", "model": "2d", "seed": 1%s, "planted": [{"name": "free", "key": "k", "value": 0.3, "neutral": null}], "measured": {}}\n' "$runs_field" > "$truth"
 else
   mkdir -p "$out"
   : > "$out/report.md"
@@ -68,7 +72,8 @@ grep -q "data of 10 runs per point" "$work/own/report.md" || fail "the summary d
 
 # TWIN_REPLICATES sets the runs in each twin's data point, and says so in the summary.
 : > "$work/log"
-TWIN_REPLICATES=20 blind "$work/twenty" 1 16000 $design || fail "TWIN_REPLICATES=20: $(cat "$work/stderr")"
+TWIN_REPLICATES=020 blind "$work/twenty" 1 16000 $design || fail "TWIN_REPLICATES=020: $(cat "$work/stderr")"
+[[ $(cat "$work/twenty/twin_replicates") == 20 ]] || fail "020 not recorded as 20"
 [[ $(grep -c -- '^twin .* --replicates 20 ' "$work/log") == "$cases" ]] || fail "TWIN_REPLICATES=20 did not reach every twin"
 grep -q "data of 20 runs per point" "$work/twenty/report.md" || fail "the summary does not say 20 runs per point"
 
@@ -112,6 +117,11 @@ blind "$work/old" 1 16000 $design; rc_old=$?
 set -e
 [[ $rc_old == 2 ]] || fail "a pass folder without the record resumed with a seed per twin: exit $rc_old"
 grep -q "made with MODEL_SEEDS design, not per-twin" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
+set +e
+MODEL_SEEDS=design TWIN_REPLICATES=20 blind "$work/old" 1 16000 $design; rc_old_runs=$?
+set -e
+[[ $rc_old_runs == 2 ]] || fail "a pass folder without the record resumed with 20 runs per point: exit $rc_old_runs"
+grep -q "made with TWIN_REPLICATES 10, not 20" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
 [[ $(ls "$work/old" | tr '\n' ' ') == "design seed_offset twins " ]] || fail "a refused run wrote into the old pass folder: $(ls "$work/old")"
 
 # The oracle's remaking gives each twin the model seed the pass gave it (else its twin differs).

@@ -222,7 +222,7 @@ TEST(EffectTermResponse, TheCubicsVarianceCountsEverySizeItLeansOn) {
         s1 += v, s2 += v * v;
       }
       const double spread = (s2 - s1 * s1 / draws) / (draws - 1);
-      // The ratios README and fit.cpp quote (spread over the bound), printed so that they can be remade.
+      // The ratios calibrate/README.md (step 4) and fit.cpp quote (spread over the bound), printed so that they can be remade.
       std::cout << fmt::format("{} deg, correlation {}: spread / variance {:.2f}\n", da, rho, spread / variance);
       EXPECT_LT(spread, 1.1 * variance) << da << " at correlation " << rho;  // 1.1: the draws' own error, ~2 %
       if (rho == 1.0 && da > 2.0) {  // weights of nearly one sign: near the bound
