@@ -39,6 +39,24 @@ Score score_signature(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   return s;
 }
 
+BlockScore score_block(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::MatrixXd& U) {
+  BlockScore b;
+  if (U.cols() == 0) return b;
+  const Eigen::MatrixXd PU = projector_out(X) * U;
+  // Nothing left once X is projected out (U within X's span, to rounding): no test.
+  if (PU.norm() <= 1e-9 * U.norm()) return b;
+  // An orthonormal basis of P U's column space (rank-revealing, relative to its largest column):
+  // S is the squared length of r's share in it.
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(PU);
+  qr.setThreshold(1e-9);
+  b.dof = static_cast<int>(qr.rank());
+  if (b.dof == 0) return b;
+  const Eigen::MatrixXd Q = Eigen::MatrixXd(qr.householderQ()).leftCols(b.dof);
+  b.statistic = (Q.transpose() * r).squaredNorm();
+  b.p = 1 - chi_square_cdf(b.statistic, b.dof);
+  return b;
+}
+
 bool size_direction_possible(double estimate, double neutral, double lo, double hi, double step) {
   const double room = estimate > 0 ? hi - neutral : estimate < 0 ? neutral - lo : 1.0;
   return room > 0.25 * std::abs(step);

@@ -46,6 +46,17 @@ struct Score {
 // fitted parameters' sensitivities X projected out.
 Score score_signature(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u);
 
+// The score test of several directions at once: columns U, with X projected out, against r.
+// S = r^T P U (U^T P U)^+ U^T P r ~ chi^2(rank of P U) under the null (the residual's share along
+// P U is noise). Directions X already spans add nothing: the columns of U may sum to one of X's
+// (form_check.hpp splits an added effect's signature by a design column so).
+struct BlockScore {
+  double statistic = 0;  // S
+  int dof = 0;           // rank of P U (0: U adds nothing beyond X)
+  double p = 1;          // P(chi^2_dof > S); 1 without degrees of freedom
+};
+BlockScore score_block(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::MatrixXd& U);
+
 // Whether an effect can take a size on the side of neutral its linearised estimate points to.
 // Most catalogue effects cannot go below neutral (a drag, a tilt, a rounding: neutral is the
 // range's end), and a residual that asks for a negative one is no evidence for them; the score

@@ -580,13 +580,16 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.after.simulated_fresh = fresh[1];
 
   out.held_out_fresh_fit_aware = held_out_fit_aware(data, surface, out.after, fresh[1]);
+  out.form_checks = form_checks(data, surface, out.after);
+  out.form_differs = form_differs(out.form_checks, def.alpha);
   const VerdictEvidence evidence{.attribution_allowed = def.max_effects > 0,
                                  .effects_added = static_cast<int>(out.effects.size()),
                                  .fitted_p_before = out.before.fitted.chi.p,
                                  .fitted_p_after = out.after.fitted.chi.p,
                                  .held_out_n = out.after.held_out_fresh.n,
                                  .held_out_fresh_p = out.held_out_fresh_fit_aware.p,
-                                 .alpha = def.alpha};
+                                 .alpha = def.alpha,
+                                 .form_differs = out.form_differs};
   out.poor_fit = poor_fit(evidence);
   out.held_out_beyond_noise = held_out_beyond_noise(evidence);
   out.verdict = final_verdict(evidence);

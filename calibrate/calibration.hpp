@@ -35,6 +35,7 @@
 #include "calibrate/attribution.hpp"
 #include "calibrate/data_file.hpp"
 #include "calibrate/evaluator.hpp"
+#include "calibrate/form_check.hpp"
 
 #include <string>
 #include <vector>
@@ -156,6 +157,10 @@ struct CalibrationResult {
   bool held_out_route = false;     // CalibrationDef::held_out_route it ran with
   bool independent_signatures = false;  // CalibrationDef::independent_signatures it ran with
   bool poor_fit = false;           // chi^2 p < 0.01 after everything
+  // Whether each added effect is one size across the design (form_check.hpp): every check, and
+  // whether any is significant (Bonferroni over them at alpha).
+  std::vector<FormCheck> form_checks;
+  bool form_differs = false;
   double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)
   double surface_noise_ratio = NAN;  // the baseline's true model variance over what the surface reports, and
   double node_correlation = NAN;     // the replicates' correlation between nodes it comes from (surface_noise.hpp)

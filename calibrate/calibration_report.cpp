@@ -72,6 +72,25 @@ void write_detectability_md(std::ostream& o, const CalibrationResult& r) {
     o << fmt::format("| {} | {:g} | {} |\n", d.effect, d.neutral, detectability_text(d));
 }
 
+// Whether each added effect is one size across the design (form_check.hpp).
+void write_form_checks_md(std::ostream& o, const CalibrationResult& r) {
+  if (r.form_checks.empty()) return;
+  o << "\n## Is each added effect one size across the design?\n\nA catalogue effect is one constant of the setup "
+       "at every design point. Here its sensitivity is split by each design column's levels (and by observable), and "
+       "a score test asks whether the residual after the fit wants different sizes at different levels (degrees of "
+       "freedom: levels - 1; p of the statistic over *scale*, max(1, chi2/nu) of the residual outside the tested "
+       "directions; adjusted by Bonferroni over the checks below). A significant one says the effect's one size does not fit the design, as an effect "
+       "of another form read as this one would (a drag quadratic in the speed read as a linear drag asks for more "
+       "drag where the spheres run faster); it names no other effect. Linear, at the fit: it sees a mismatch only "
+       "along what the design varies.\n\n| effect | split by | levels | statistic | scale | dof | p | adjusted p |\n"
+       "|---|---|---|---|---|---|---|---|\n";
+  for (const FormCheck& c : r.form_checks)
+    o << fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {} | {:.3g} | {:.3g} |\n", c.effect, c.column, c.levels,
+                     c.statistic, c.scale, c.dof, c.p, c.p_adjusted);
+  o << (r.form_differs ? "\nAt least one differs (adjusted p < alpha): the verdict says so.\n"
+                       : "\nNone differs at the loop's level.\n");
+}
+
 void write_summary_json(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
   o << "{\n";
   // "observable": the points' default kind (a name, as before several observables per file);
@@ -104,6 +123,14 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
     o << fmt::format(R"({}{{"effect": {}, "key": {}, "group": {}, "neutral": {}, "value": {}, "lo95": {}, "hi95": {}, "interval_bounded": {}}})",
                      i ? ", " : "", json_string(e.effect), json_string(e.key), json_list(e.group), json_number(e.neutral),
                      json_number(e.value), json_number(e.lo95), json_number(e.hi95), e.interval_bounded ? "true" : "false");
+  }
+  o << "],\n";
+  o << fmt::format("  \"form_differs\": {},\n  \"form_checks\": [", r.form_differs ? "true" : "false");
+  for (std::size_t i = 0; i < r.form_checks.size(); ++i) {
+    const FormCheck& c = r.form_checks[i];
+    o << fmt::format(R"({}{{"effect": {}, "column": {}, "levels": {}, "statistic": {}, "scale": {}, "dof": {}, "p": {}, "p_adjusted": {}}})",
+                     i ? ", " : "", json_string(c.effect), json_string(c.column), c.levels, json_number(c.statistic),
+                     json_number(c.scale), c.dof, json_number(c.p), json_number(c.p_adjusted));
   }
   o << "],\n";
   o << "  \"before\": " << json_state(r.before) << ",\n";
@@ -214,6 +241,9 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
          "that changes these observables the same way, within the noise, could be reported as the catalogue effect "
          "(or group) it most resembles.";
     if (r.poor_fit || r.held_out_beyond_noise) o << " Where the fit stays poor, what remains may be such an effect.";
+    if (r.form_differs)
+      o << " An added effect's size differs across the design (section \"Is each added effect one size across the "
+           "design?\"): such an effect may be acting in its place.";
   }
   if (r.poor_fit)
     o << (r.effects.empty() ? " The fit is poor (chi2 p < 0.01 on the fitted points)."
@@ -287,6 +317,7 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                        rd.best, fmt::join(rd.rivals, ", "));
     o << fmt::format("\nDecision: {}.\n", rd.decision);
   }
+  write_form_checks_md(o, r);
   write_detectability_md(o, r);
   o << "\n## Log\n\n```\n";
   for (const std::string& l : r.log) o << l << "\n";

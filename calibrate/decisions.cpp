@@ -78,7 +78,9 @@ std::string final_verdict(const VerdictEvidence& e) {
     return held_beyond ? "unexplained residual: the held-out points are beyond the noise" : "consistent with noise";
   }
   if (poor_fit(e)) return "effect found, poor fit remains";
-  return held_beyond ? "effect found; the held-out points are still beyond the noise" : "effect found";
+  if (held_beyond) return "effect found; the held-out points are still beyond the noise";
+  return e.form_differs ? "effect found; its size differs across the design: an effect of another form may be acting"
+                        : "effect found";
 }
 
 }  // namespace gapflow

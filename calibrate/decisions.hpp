@@ -54,6 +54,12 @@
 //    Two tests at level alpha: "unexplained" on a correct model at a rate <= 2 alpha
 //    as far as the linearisation holds and the points are independent (the observables
 //    of one design point share runs; the loop's chi^2 neglects that everywhere).
+//    After an effect is added, its size must also be one across the design
+//    (calibrate/form_check.hpp): where a design column's levels want sizes that differ
+//    (Bonferroni-adjusted p < alpha over every check), the verdict says "effect found; its
+//    size differs across the design: an effect of another form may be acting". The
+//    effect stays added (it improved the fit); the verdict flags that its form may be
+//    wrong. A flag, not an attribution: the check names no other effect.
 // 4. Which effect to try. The score ranks the candidates by their signatures, linear at
 //    the state the round starts from; where the effect is large or the fitted parameters
 //    sit far from the truth, the linear ranking can name the wrong one (blind pass 10's
@@ -134,13 +140,15 @@ struct VerdictEvidence {
   double held_out_fresh_p = 1;      // chi^2 p of the held-out points after everything, fresh seeds
   double alpha = 0.05;              // level of both chi^2 tests
   double poor_fit_p = 0.01;         // fitted chi^2 p below which a fit with effects is flagged poor
+  bool form_differs = false;        // an added effect's size differs across the design (form_check.hpp)
 };
 
 bool held_out_beyond_noise(const VerdictEvidence& e);
 bool poor_fit(const VerdictEvidence& e);  // the fitted points after everything
 // "consistent with noise" | "unexplained residual" | "unexplained residual: the held-out points are
 // beyond the noise" | "effect found" | "effect found, poor fit remains" | "effect found; the held-out
-// points are still beyond the noise" | "residual not attributed (--max-effects 0)" | ...
+// points are still beyond the noise" | "effect found; its size differs across the design: an effect of
+// another form may be acting" | "residual not attributed (--max-effects 0)" | ...
 std::string final_verdict(const VerdictEvidence& e);
 
 }  // namespace gapflow

@@ -78,35 +78,33 @@ ModelState make_state(const DataFile& data, const ParameterSet& params, const Pr
   return s;
 }
 
-// The final state's held-out chi^2 on fresh seeds, with the fitted parameters' (free and added
-// effects') uncertainty carried to the held-out points (held_out_chi_square): sensitivities by
-// central differences on the final surface, over 1e-3 of each parameter's range. A parameter
-// the fit left at an end of its range (twin-3d's rolling contact at 1) is left out: the
-// linear variance would widen C for a direction the fit cannot move in.
-ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const ModelState& after,
-                             const Prediction& fresh) {
-  struct Key {
-    std::string key;
-    double at, h;
-  };
-  std::vector<Key> keys;
+SurfaceSlopes surface_slopes(const DataFile& data, const Surface& surface, const ParameterSet& params) {
+  SurfaceSlopes out;
   auto consider = [&](const std::string& key, double fallback, double lo, double hi) {
-    const double at = after.params.get(key, fallback), h = 1e-3 * (hi - lo);
-    if (at - h > lo && at + h < hi) keys.push_back({key, at, h});
+    const double at = params.get(key, fallback), h = 1e-3 * (hi - lo);
+    if (at - h <= lo || at + h >= hi) return;
+    const Prediction up = surface.predict_fit(params.with(key, at + h));
+    const Prediction dn = surface.predict_fit(params.with(key, at - h));
+    std::vector<double> d;
+    for (std::size_t i = 0; i < data.points.size(); ++i) d.push_back((up.fit[i] - dn.fit[i]) / (2 * h));
+    out.keys.push_back(key);
+    out.slope.push_back(std::move(d));
   };
   for (const FreeParameter& f : data.free) consider(f.key, 0.5 * (f.lo + f.hi), f.lo, f.hi);
   for (const EffectTerm& e : surface.effects) consider(e.key, e.neutral, e.lo, e.hi);
-  std::vector<std::vector<double>> slope;  // [key][point], fit scale per key unit
-  for (const auto& [key, at, h] : keys) {
-    const Prediction up = surface.predict_fit(after.params.with(key, at + h));
-    const Prediction dn = surface.predict_fit(after.params.with(key, at - h));
-    std::vector<double> d;
-    for (std::size_t i = 0; i < data.points.size(); ++i) d.push_back((up.fit[i] - dn.fit[i]) / (2 * h));
-    slope.push_back(std::move(d));
-  }
+  return out;
+}
+
+// The final state's held-out chi^2 on fresh seeds, with the fitted parameters' (free and added
+// effects') uncertainty carried to the held-out points (held_out_chi_square), the sensitivities
+// surface_slopes'.
+ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const ModelState& after,
+                             const Prediction& fresh) {
+  const SurfaceSlopes slopes = surface_slopes(data, surface, after.params);
+  const std::vector<std::vector<double>>& slope = slopes.slope;
   std::vector<std::size_t> fitted, held;
   for (std::size_t i = 0; i < data.points.size(); ++i) (data.points[i].held_out ? held : fitted).push_back(i);
-  const auto k = static_cast<Eigen::Index>(keys.size());
+  const auto k = static_cast<Eigen::Index>(slopes.keys.size());
   Eigen::MatrixXd X(static_cast<Eigen::Index>(fitted.size()), k), G(static_cast<Eigen::Index>(held.size()), k);
   Eigen::VectorXd r(static_cast<Eigen::Index>(held.size()));
   const std::vector<double> w = whitened_residual(data, fresh);
@@ -124,9 +122,7 @@ ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const
   }
   for (std::size_t b = 0; b < held.size(); ++b) r(static_cast<Eigen::Index>(b)) = w[held[b]];
   // The measurements are fitted data: they narrow the fitted parameters' uncertainty.
-  std::vector<std::string> names;
-  for (const Key& key : keys) names.push_back(key.key);
-  const MeasurementRows meas = measurement_rows(data, after.params, names);
+  const MeasurementRows meas = measurement_rows(data, after.params, slopes.keys);
   Eigen::MatrixXd Xm(X.rows() + meas.sensitivity.rows(), k);
   Xm << X, meas.sensitivity;
   return held_out_chi_square(r, G, Xm);

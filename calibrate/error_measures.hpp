@@ -6,6 +6,7 @@
 #include "calibrate/evaluator.hpp"
 #include "calibrate/fit.hpp"
 
+#include <string>
 #include <vector>
 
 namespace gapflow {
@@ -27,6 +28,15 @@ struct HeldOutCheck {
 // The keep test's held-out comparison of two parameter sets (decisions.hpp, rule 2).
 HeldOutCheck held_out_check(const DataFile& data, const CalibrationDef& def, Evaluator& ev, const ParameterSet& before,
                             const ParameterSet& after);
+
+// The surface's sensitivities to every fitted parameter (free ones and added effects) at `params`:
+// central differences over 1e-3 of each parameter's range. A parameter the fit left at an end of
+// its range (twin-3d's rolling contact at 1) is left out: the fit cannot move it that way.
+struct SurfaceSlopes {
+  std::vector<std::string> keys;
+  std::vector<std::vector<double>> slope;  // [key][point], fit scale per key unit
+};
+SurfaceSlopes surface_slopes(const DataFile& data, const Surface& surface, const ParameterSet& params);
 
 // The verdict's held-out chi^2 on fresh seeds with the fitted parameters' uncertainty (rule 3).
 ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const ModelState& after,

@@ -1,0 +1,118 @@
+// Is an added effect one size across the design? (calibrate/form_check.hpp): the block score test
+// behind it on linear problems with known answers, and the verdict it adds. The loop end to end,
+// with an effect of another form than the catalogue's, is in test_calibration_synthetic.cpp.
+#include "calibrate/attribution.hpp"
+#include "calibrate/decisions.hpp"
+#include "calibrate/form_check.hpp"
+#include "common/random.hpp"
+#include "common/statistics.hpp"
+
+#include <boost/math/distributions/non_central_chi_squared.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace gapflow {
+namespace {
+
+// A design of 3 inclines x 4 other settings (12 points); the fit moves an offset (a friction
+// that shifts every point alike) and one effect whose sensitivity grows with the incline, as a
+// drag's does. level(i): the incline's index of point i.
+constexpr int kPoints = 12;
+int level(int i) { return i / 4; }
+Eigen::VectorXd effect_sensitivity() {
+  Eigen::VectorXd u(kPoints);
+  for (int i = 0; i < kPoints; ++i) u(i) = -(0.6 + 0.45 * level(i)) * (1 + 0.1 * (i % 4));
+  return u;
+}
+Eigen::MatrixXd fitted_directions() {
+  Eigen::MatrixXd X(kPoints, 2);
+  X.col(0) = Eigen::VectorXd::Constant(kPoints, 1.0);
+  X.col(1) = effect_sensitivity();
+  return X;
+}
+// The effect's sensitivity split by incline: one column per level.
+Eigen::MatrixXd split_by_incline() {
+  const Eigen::VectorXd u = effect_sensitivity();
+  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(kPoints, 3);
+  for (int i = 0; i < kPoints; ++i) U(i, level(i)) = u(i);
+  return U;
+}
+Eigen::VectorXd unit_noise(RandomStream& rng) {
+  Eigen::VectorXd e(kPoints);
+  for (int i = 0; i < kPoints; ++i) e(i) = rng.normal();
+  return e;
+}
+
+TEST(FormCheck, ASplitOfAFittedDirectionHasOneDegreeOfFreedomLessThanItsLevels) {
+  // The split's columns sum to the effect's own sensitivity, which the fit moves already.
+  RandomStream rng(3);
+  const Eigen::MatrixXd X = fitted_directions();
+  const BlockScore b = score_block(projector_out(X) * unit_noise(rng), X, split_by_incline());
+  EXPECT_EQ(b.dof, 2);
+  // Nothing to split: no columns, no test.
+  EXPECT_EQ(score_block(unit_noise(rng), X, Eigen::MatrixXd(kPoints, 0)).dof, 0);
+  EXPECT_EQ(score_block(unit_noise(rng), X, Eigen::MatrixXd(X.col(1))).dof, 0);
+}
+
+TEST(FormCheck, TheBlockScoreHoldsItsLevelOnACorrectModel) {
+  // Residuals after a least-squares fit of a correct model: P e. At level 0.05 the test rejects
+  // 5 % of 4000 draws (binomial sd 0.34 %).
+  RandomStream rng(11);
+  const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
+  int rejected = 0;
+  const int draws = 4000;
+  for (int k = 0; k < draws; ++k) rejected += score_block(P * unit_noise(rng), X, U).p < 0.05;
+  EXPECT_NEAR(static_cast<double>(rejected) / draws, 0.05, 0.012);
+}
+
+TEST(FormCheck, ASizeThatGrowsWithTheInclineIsSeenAsOftenAsTheNoncentralChiSquareSays) {
+  // The truth: the effect at size 1 on the shallowest incline, 3 and 6 on the others (as a drag
+  // quadratic in the speed, read as a linear one, would be); the fit takes one size and the
+  // offset. What the one size leaves, P U s, is the test's noncentrality lambda = |P U s|^2, and
+  // the share of draws it rejects at 0.05 is the noncentral chi^2's power (binomial sd over 1000
+  // draws about 1.3 %).
+  RandomStream rng(5);
+  const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
+  const Eigen::Vector3d sizes(1.0, 3.0, 6.0);
+  const double lambda = (P * U * sizes).squaredNorm();
+  const boost::math::non_central_chi_squared law(2, lambda);
+  const double power = boost::math::cdf(boost::math::complement(law, chi_square_quantile(0.95, 2)));
+  ASSERT_GT(power, 0.5) << "the premise: a mismatch the test should see more often than not (lambda " << lambda << ")";
+  int seen = 0;
+  const int draws = 1000;
+  for (int k = 0; k < draws; ++k) seen += score_block(P * (U * sizes + unit_noise(rng)), X, U).p < 0.05;
+  EXPECT_NEAR(static_cast<double>(seen) / draws, power, 0.045) << "lambda " << lambda;
+  // One size everywhere: the split finds nothing to explain.
+  const BlockScore one = score_block(P * (U * Eigen::Vector3d(2, 2, 2)), X, U);
+  EXPECT_LT(one.statistic, 1e-9);
+}
+
+TEST(FormCheck, AnyAdjustedPBelowAlphaFlagsTheForm) {
+  std::vector<FormCheck> checks(2);
+  checks[0].p_adjusted = 0.2;
+  checks[1].p_adjusted = 0.06;
+  EXPECT_FALSE(form_differs(checks, 0.05));
+  checks[1].p_adjusted = 0.04;
+  EXPECT_TRUE(form_differs(checks, 0.05));
+  EXPECT_FALSE(form_differs({}, 0.05));
+}
+
+TEST(FinalVerdict, AnEffectWhoseSizeDiffersAcrossTheDesignIsFlagged) {
+  VerdictEvidence e{.effects_added = 1, .fitted_p_before = 1e-6, .fitted_p_after = 0.4, .held_out_n = 12,
+                    .held_out_fresh_p = 0.3, .form_differs = true};
+  EXPECT_EQ(final_verdict(e), "effect found; its size differs across the design: an effect of another form may be acting");
+  // A poor fit or held-out points beyond the noise are said first (they are the stronger flags).
+  e.fitted_p_after = 1e-4;
+  EXPECT_EQ(final_verdict(e), "effect found, poor fit remains");
+  e.fitted_p_after = 0.4;
+  e.held_out_fresh_p = 1e-4;
+  EXPECT_EQ(final_verdict(e), "effect found; the held-out points are still beyond the noise");
+  e.held_out_fresh_p = 0.3;
+  e.form_differs = false;
+  EXPECT_EQ(final_verdict(e), "effect found");
+}
+
+}  // namespace
+}  // namespace gapflow
