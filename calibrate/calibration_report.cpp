@@ -76,17 +76,18 @@ void write_detectability_md(std::ostream& o, const CalibrationResult& r) {
 void write_form_checks_md(std::ostream& o, const CalibrationResult& r) {
   if (r.form_checks.empty()) return;
   o << "\n## Is each added effect one size across the design?\n\nA catalogue effect is one constant of the setup "
-       "at every design point. Here its sensitivity is split by each design column's levels (and by observable), and "
-       "a score test asks whether the residual after the fit wants different sizes at different levels (degrees of "
-       "freedom: levels - 1; p of the statistic over *scale*, max(1, chi2/nu) of the residual outside the tested "
-       "directions; adjusted by Bonferroni over the checks below). A significant one says the effect's one size does not fit the design, as an effect "
-       "of another form read as this one would (a drag quadratic in the speed read as a linear drag asks for more "
-       "drag where the spheres run faster); it names no other effect. Linear, at the fit: it sees a mismatch only "
-       "along what the design varies.\n\n| effect | split by | levels | statistic | scale | dof | p | adjusted p |\n"
-       "|---|---|---|---|---|---|---|---|\n";
+       "at every design point. Here its sensitivity is split by each design column's levels (and by observable; a level "
+       "needs two fitted points the effect moves), and a score test asks whether the residual after the fit wants "
+       "different sizes at different levels (dof: levels - 1). Its p is Fisher's F on (dof, rest dof) against the "
+       "residual outside the fitted and tested directions, on *scale* max(1, that residual's chi2 / rest dof), and is "
+       "adjusted by Bonferroni over the checks below. A significant one says the effect's one size does not fit the "
+       "design, as an effect of another form read as this one would (a drag quadratic in the speed read as a linear "
+       "drag asks for more drag where the spheres run faster); it names no other effect. Linear, at the fit: it sees a "
+       "mismatch only along what the design varies.\n\n| effect | split by | levels | statistic | dof | rest dof | "
+       "scale | p | adjusted p |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const FormCheck& c : r.form_checks)
-    o << fmt::format("| {} | {} | {} | {:.2f} | {:.2f} | {} | {:.3g} | {:.3g} |\n", c.effect, c.column, c.levels,
-                     c.statistic, c.scale, c.dof, c.p, c.p_adjusted);
+    o << fmt::format("| {} | {} | {} | {:.2f} | {} | {} | {:.2f} | {:.3g} | {:.3g} |\n", c.effect, c.column, c.levels,
+                     c.statistic, c.dof, c.rest_dof, c.scale, c.p, c.p_adjusted);
   o << (r.form_differs ? "\nAt least one differs (adjusted p < alpha): the verdict says so.\n"
                        : "\nNone differs at the loop's level.\n");
 }
@@ -128,9 +129,9 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
   o << fmt::format("  \"form_differs\": {},\n  \"form_checks\": [", r.form_differs ? "true" : "false");
   for (std::size_t i = 0; i < r.form_checks.size(); ++i) {
     const FormCheck& c = r.form_checks[i];
-    o << fmt::format(R"({}{{"effect": {}, "column": {}, "levels": {}, "statistic": {}, "scale": {}, "dof": {}, "p": {}, "p_adjusted": {}}})",
+    o << fmt::format(R"({}{{"effect": {}, "column": {}, "levels": {}, "statistic": {}, "dof": {}, "rest_dof": {}, "scale": {}, "p": {}, "p_adjusted": {}}})",
                      i ? ", " : "", json_string(c.effect), json_string(c.column), c.levels, json_number(c.statistic),
-                     json_number(c.scale), c.dof, json_number(c.p), json_number(c.p_adjusted));
+                     c.dof, c.rest_dof, json_number(c.scale), json_number(c.p), json_number(c.p_adjusted));
   }
   o << "],\n";
   o << "  \"before\": " << json_state(r.before) << ",\n";

@@ -7,6 +7,7 @@
 #include "calibrate/fit.hpp"
 #include "common/statistics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -78,15 +79,21 @@ ModelState make_state(const DataFile& data, const ParameterSet& params, const Pr
   return s;
 }
 
-SurfaceSlopes surface_slopes(const DataFile& data, const Surface& surface, const ParameterSet& params) {
+SurfaceSlopes surface_slopes(const DataFile& data, const Surface& surface, const ParameterSet& params,
+                             AtRangeEnd at_end) {
   SurfaceSlopes out;
   auto consider = [&](const std::string& key, double fallback, double lo, double hi) {
     const double at = params.get(key, fallback), h = 1e-3 * (hi - lo);
-    if (at - h <= lo || at + h >= hi) return;
-    const Prediction up = surface.predict_fit(params.with(key, at + h));
-    const Prediction dn = surface.predict_fit(params.with(key, at - h));
+    const bool inside = at - h > lo && at + h < hi;
+    if (!inside && at_end == AtRangeEnd::leave_out) return;
+    // Inside: central; at an end: one-sided into the range.
+    const double up_at = inside || at - h <= lo ? at + h : at, dn_at = inside || at + h >= hi ? at - h : at;
+    const Prediction up = surface.predict_fit(params.with(key, std::min(up_at, hi)));
+    const Prediction dn = surface.predict_fit(params.with(key, std::max(dn_at, lo)));
+    const double width = std::min(up_at, hi) - std::max(dn_at, lo);
+    if (!(width > 0)) return;
     std::vector<double> d;
-    for (std::size_t i = 0; i < data.points.size(); ++i) d.push_back((up.fit[i] - dn.fit[i]) / (2 * h));
+    for (std::size_t i = 0; i < data.points.size(); ++i) d.push_back((up.fit[i] - dn.fit[i]) / width);
     out.keys.push_back(key);
     out.slope.push_back(std::move(d));
   };
@@ -95,37 +102,52 @@ SurfaceSlopes surface_slopes(const DataFile& data, const Surface& surface, const
   return out;
 }
 
+FittedRows fitted_rows(const DataFile& data, const Surface& surface, const ModelState& state,
+                       const SurfaceSlopes& slopes) {
+  FittedRows f;
+  for (std::size_t i = 0; i < data.points.size(); ++i)
+    if (!data.points[i].held_out) f.points.push_back(i);
+  const MeasurementRows meas = measurement_rows(data, state.params, slopes.keys);
+  const auto n = static_cast<Eigen::Index>(f.points.size()), rows = n + meas.residual.size();
+  const auto k = static_cast<Eigen::Index>(slopes.keys.size());
+  f.r = Eigen::VectorXd::Zero(rows);
+  f.X = Eigen::MatrixXd::Zero(rows, k);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    const std::size_t i = f.points[static_cast<std::size_t>(a)];
+    if (!state.prediction.valid[i] || !surface.valid[i]) continue;
+    ++f.informative;
+    f.r(a) = state.whitened[i];
+    const double sigma = total_sigma(data, state.prediction, i);
+    for (Eigen::Index j = 0; j < k; ++j) f.X(a, j) = slopes.slope[static_cast<std::size_t>(j)][i] / sigma;
+  }
+  f.r.tail(meas.residual.size()) = meas.residual;
+  f.X.bottomRows(meas.residual.size()) = meas.sensitivity;
+  f.informative += static_cast<int>(meas.residual.size());
+  return f;
+}
+
 // The final state's held-out chi^2 on fresh seeds, with the fitted parameters' (free and added
 // effects') uncertainty carried to the held-out points (held_out_chi_square), the sensitivities
-// surface_slopes'.
+// surface_slopes' (a parameter at an end of its range left out).
 ChiSquare held_out_fit_aware(const DataFile& data, const Surface& surface, const ModelState& after,
                              const Prediction& fresh) {
   const SurfaceSlopes slopes = surface_slopes(data, surface, after.params);
-  const std::vector<std::vector<double>>& slope = slopes.slope;
-  std::vector<std::size_t> fitted, held;
-  for (std::size_t i = 0; i < data.points.size(); ++i) (data.points[i].held_out ? held : fitted).push_back(i);
+  std::vector<std::size_t> held;
+  for (std::size_t i = 0; i < data.points.size(); ++i)
+    if (data.points[i].held_out) held.push_back(i);
   const auto k = static_cast<Eigen::Index>(slopes.keys.size());
-  Eigen::MatrixXd X(static_cast<Eigen::Index>(fitted.size()), k), G(static_cast<Eigen::Index>(held.size()), k);
+  Eigen::MatrixXd G(static_cast<Eigen::Index>(held.size()), k);
   Eigen::VectorXd r(static_cast<Eigen::Index>(held.size()));
   const std::vector<double> w = whitened_residual(data, fresh);
-  for (Eigen::Index j = 0; j < k; ++j) {
-    const std::vector<double>& d = slope[static_cast<std::size_t>(j)];
-    for (std::size_t a = 0; a < fitted.size(); ++a) {
-      const std::size_t i = fitted[a];
-      X(static_cast<Eigen::Index>(a), j) =
-          after.prediction.valid[i] && surface.valid[i] ? d[i] / total_sigma(data, after.prediction, i) : 0.0;
-    }
-    for (std::size_t b = 0; b < held.size(); ++b) {
-      const std::size_t i = held[b];
-      G(static_cast<Eigen::Index>(b), j) = fresh.valid[i] && surface.valid[i] ? d[i] / total_sigma(data, fresh, i) : 0.0;
-    }
+  for (std::size_t b = 0; b < held.size(); ++b) {
+    const std::size_t i = held[b];
+    r(static_cast<Eigen::Index>(b)) = w[i];
+    for (Eigen::Index j = 0; j < k; ++j)
+      G(static_cast<Eigen::Index>(b), j) =
+          fresh.valid[i] && surface.valid[i] ? slopes.slope[static_cast<std::size_t>(j)][i] / total_sigma(data, fresh, i) : 0.0;
   }
-  for (std::size_t b = 0; b < held.size(); ++b) r(static_cast<Eigen::Index>(b)) = w[held[b]];
-  // The measurements are fitted data: they narrow the fitted parameters' uncertainty.
-  const MeasurementRows meas = measurement_rows(data, after.params, slopes.keys);
-  Eigen::MatrixXd Xm(X.rows() + meas.sensitivity.rows(), k);
-  Xm << X, meas.sensitivity;
-  return held_out_chi_square(r, G, Xm);
+  // The fitted points' sensitivities and the measurements' rows: what the fit's uncertainty is made of.
+  return held_out_chi_square(r, G, fitted_rows(data, surface, after, slopes).X);
 }
 
 }  // namespace gapflow

@@ -13,38 +13,9 @@
 namespace gapflow {
 namespace {
 
-// The fitted points' whitened residual and sensitivities at the final state, with the free
-// parameters' measurements as rows of their own below (they are fitted data: score_round's X).
-struct FittedRows {
-  std::vector<std::size_t> points;  // data index of each point row
-  Eigen::VectorXd r;
-  Eigen::MatrixXd X;                // [row][key of slopes]
-};
-
-FittedRows fitted_rows(const DataFile& data, const Surface& surface, const ModelState& after,
-                       const SurfaceSlopes& slopes) {
-  FittedRows f;
-  for (std::size_t i = 0; i < data.points.size(); ++i)
-    if (!data.points[i].held_out) f.points.push_back(i);
-  const MeasurementRows meas = measurement_rows(data, after.params, slopes.keys);
-  const auto n = static_cast<Eigen::Index>(f.points.size()), rows = n + meas.residual.size();
-  const auto k = static_cast<Eigen::Index>(slopes.keys.size());
-  f.r = Eigen::VectorXd::Zero(rows);
-  f.X = Eigen::MatrixXd::Zero(rows, k);
-  for (Eigen::Index a = 0; a < n; ++a) {
-    const std::size_t i = f.points[static_cast<std::size_t>(a)];
-    if (!after.prediction.valid[i] || !surface.valid[i]) continue;  // no value: no information on a size
-    f.r(a) = after.whitened[i];
-    const double sigma = total_sigma(data, after.prediction, i);
-    for (Eigen::Index j = 0; j < k; ++j) f.X(a, j) = slopes.slope[static_cast<std::size_t>(j)][i] / sigma;
-  }
-  f.r.tail(meas.residual.size()) = meas.residual;
-  f.X.bottomRows(meas.residual.size()) = meas.sensitivity;
-  return f;
-}
-
 // The partitions a size may differ over: each design column, and the observable where the fitted
-// points measure more than one. level[p][row]: the level's label of each point row.
+// points measure more than one. Each gives a level's label per point row. Design values are TOML
+// literals as the loader normalised them (number_text: 4.5 and 4.50 are one level).
 std::vector<std::pair<std::string, std::vector<std::string>>> partitions(const DataFile& data,
                                                                          const std::vector<std::size_t>& points) {
   std::vector<std::pair<std::string, std::vector<std::string>>> out;
@@ -60,50 +31,67 @@ std::vector<std::pair<std::string, std::vector<std::string>>> partitions(const D
   return out;
 }
 
-// One column per level the effect moves at min_points_per_level points or more: the effect's
-// sensitivity u at that level's rows, 0 elsewhere. Fewer than two such levels: no columns.
-Eigen::MatrixXd split_by_level(const Eigen::VectorXd& u, const std::vector<std::string>& level, int min_points) {
+}  // namespace
+
+FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u,
+                      const std::vector<std::string>& level, int informative_rows, const FormCheckDef& def) {
+  FormCheck c;
+  // The rows of each level the effect moves; rows past `level` (the measurements') have none.
   std::map<std::string, std::vector<Eigen::Index>> rows;
-  for (std::size_t a = 0; a < level.size(); ++a)
+  for (std::size_t a = 0; a < level.size() && a < static_cast<std::size_t>(u.size()); ++a)
     if (u(static_cast<Eigen::Index>(a)) != 0) rows[level[a]].push_back(static_cast<Eigen::Index>(a));
   std::vector<const std::vector<Eigen::Index>*> kept;
   for (const auto& [name, at] : rows)
-    if (static_cast<int>(at.size()) >= min_points) kept.push_back(&at);
-  if (kept.size() < 2) return Eigen::MatrixXd(u.size(), 0);
+    if (static_cast<int>(at.size()) >= def.min_points_per_level) kept.push_back(&at);
+  if (kept.size() < 2) return c;
   Eigen::MatrixXd U = Eigen::MatrixXd::Zero(u.size(), static_cast<Eigen::Index>(kept.size()));
   for (std::size_t l = 0; l < kept.size(); ++l)
     for (Eigen::Index a : *kept[l]) U(a, static_cast<Eigen::Index>(l)) = u(a);
-  return U;
+  // The levels with too few points keep a size of their own, untested: their part of u joins the
+  // fitted directions. Left in u's own column (which X holds), they would be tested as a level.
+  Eigen::MatrixXd Xc = X;
+  const Eigen::VectorXd rest_of_u = u - U.rowwise().sum();
+  if (rest_of_u.norm() > 0) {
+    Xc.conservativeResize(Eigen::NoChange, X.cols() + 1);
+    Xc.col(X.cols()) = rest_of_u;
+  }
+  const BlockScore b = score_block(r, Xc, U);
+  if (b.dof == 0) return c;
+  c.levels = static_cast<int>(kept.size());
+  c.statistic = b.statistic;
+  c.dof = b.dof;
+  // The residual outside the fitted and the tested directions sets the scale, never below the
+  // stated noise; the test is then Fisher's F on (dof, rest_dof). Without rest degrees of freedom,
+  // chi^2 at the stated noise.
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Xc);
+  c.rest_dof = informative_rows - static_cast<int>(qr.rank()) - b.dof;
+  if (c.rest_dof > 0) {
+    const double rest = (projector_out(Xc) * r).squaredNorm() - b.statistic;
+    c.scale = std::max(1.0, rest / c.rest_dof);
+    c.p = fisher_f_upper(c.statistic / (c.dof * c.scale), c.dof, c.rest_dof);
+  } else {
+    c.p = 1 - chi_square_cdf(c.statistic, c.dof);
+  }
+  return c;
 }
-
-}  // namespace
 
 std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface, const ModelState& after,
                                    const FormCheckDef& def) {
   std::vector<FormCheck> checks;
   if (surface.effects.empty()) return checks;
-  const SurfaceSlopes slopes = surface_slopes(data, surface, after.params);
+  // Every direction the fit used is projected out, a parameter left at an end of its range too.
+  const SurfaceSlopes slopes = surface_slopes(data, surface, after.params, AtRangeEnd::one_sided);
   const FittedRows f = fitted_rows(data, surface, after, slopes);
   const auto parts = partitions(data, f.points);
   for (const EffectTerm& e : surface.effects) {
     const auto at = std::find(slopes.keys.begin(), slopes.keys.end(), e.key);
-    if (at == slopes.keys.end()) continue;  // at an end of its range
+    if (at == slopes.keys.end()) continue;  // no slope (a range of zero width)
     const Eigen::VectorXd u = f.X.col(at - slopes.keys.begin());
     for (const auto& [column, level] : parts) {
-      std::vector<std::string> rows_level = level;
-      rows_level.resize(static_cast<std::size_t>(u.size()));  // measurement rows: no level (u is 0 there)
-      const Eigen::MatrixXd U = split_by_level(u, rows_level, def.min_points_per_level);
-      const BlockScore b = score_block(f.r, f.X, U);
-      if (b.dof == 0) continue;
-      FormCheck c;
+      FormCheck c = check_split(f.r, f.X, u, level, f.informative, def);
+      if (c.dof == 0) continue;
       c.effect = e.effect;
       c.column = column;
-      c.levels = static_cast<int>(U.cols());
-      c.statistic = b.statistic;
-      c.dof = b.dof;
-      const int rest_dof = after.fitted.chi.dof - b.dof;
-      if (rest_dof > 0) c.scale = std::max(1.0, (after.fitted.chi.chi2 - b.statistic) / rest_dof);
-      c.p = 1 - chi_square_cdf(c.statistic / c.scale, c.dof);
       checks.push_back(c);
     }
   }

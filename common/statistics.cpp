@@ -80,6 +80,12 @@ double chi_square_cdf(double x, double dof) {
   return regularized_gamma_p(0.5 * dof, 0.5 * x);
 }
 
+double fisher_f_upper(double f, double d1, double d2) {
+  if (!(d1 > 0) || !(d2 > 0) || f != f) return kNaN;
+  if (f <= 0) return 1.0;
+  return regularized_beta(d2 / (d2 + d1 * f), 0.5 * d2, 0.5 * d1);
+}
+
 double chi_square_quantile(double p, double dof) {
   if (!(dof > 0) || !(p >= 0) || !(p <= 1)) return kNaN;
   if (p == 0) return 0.0;

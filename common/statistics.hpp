@@ -63,6 +63,9 @@ double normal_quantile(double p);                    // p in (0, 1); -inf at 0, 
 double chi_square_cdf(double x, double dof);         // P(dof/2, x/2); 0 for x <= 0 (whatever dof)
 // Inverse of chi_square_cdf, p in [0, 1] (0 at 0, +inf at 1); NaN for dof <= 0 or p outside.
 double chi_square_quantile(double p, double dof);
+// Upper tail of Fisher's F with (d1, d2) degrees of freedom, P(F > f) = I_{d2/(d2 + d1 f)}(d2/2, d1/2):
+// 1 for f <= 0; NaN for d1 <= 0 or d2 <= 0.
+double fisher_f_upper(double f, double d1, double d2);
 double student_t_cdf(double t, double dof);           // any real dof > 0 (NaN otherwise)
 double student_t_quantile(double p, double dof);      // inverse of student_t_cdf; p in (0, 1) open, else NaN
 

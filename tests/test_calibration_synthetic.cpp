@@ -131,9 +131,10 @@ RunnerSummary run_synthetic(const std::vector<Job>& jobs, Store& store, const Ru
 // Nine fitted points (W/d 3.5, 4.5, 5.5 x incline 5, 8, 12 deg) and two held out, J_mid on a log
 // scale, the particle friction free on 0.1-0.5 (grid step 0.05); `model_replicates` model runs per point
 // from base seed `model_seed`; with `shallow_held_out`, a third held-out point on a shallower board
-// (3 deg) than any fitted one, where the design extrapolates.
+// (3 deg) than any fitted one, where the design extrapolates; with `more_gaps`, the gaps W/d 3.5-5.5
+// in steps of 0.5 (15 fitted points), so that more of the residual is left beside any one test.
 void write_design(const std::filesystem::path& file, int model_replicates, std::uint64_t model_seed,
-                  bool shallow_held_out = false) {
+                  bool shallow_held_out = false, bool more_gaps = false) {
   std::ofstream f(file);
   f << "[data]\nname = \"synthetic\"\n"
     << "[source]\ncitation = \"a closed-form model (tests/test_calibration_synthetic.cpp)\"\n"
@@ -144,7 +145,8 @@ void write_design(const std::filesystem::path& file, int model_replicates, std::
     << "[[design]]\ncolumn = \"W_over_d\"\nkey = \"bottleneck.gap_mm\"\nunit = \"d\"\n"
     << "[[design]]\ncolumn = \"incline_deg\"\nkey = \"plane.incline_deg\"\n"
     << "[[free]]\nkey = \"particles.friction_particle\"\nlo = 0.1\nhi = 0.5\nstep = 0.05\n";
-  for (double w : {3.5, 4.5, 5.5})
+  const std::vector<double> gaps = more_gaps ? std::vector<double>{3.5, 4.0, 4.5, 5.0, 5.5} : std::vector<double>{3.5, 4.5, 5.5};
+  for (double w : gaps)
     for (double incline : {5.0, 8.0, 12.0})
       f << "[[point]]\nW_over_d = " << w << "\nincline_deg = " << incline << "\nvalue = 1\nuncertainty = 1\n";
   f << "[[point]]\nW_over_d = 4\nincline_deg = 10\nvalue = 1\nuncertainty = 1\nheld_out = true\n";
@@ -165,6 +167,7 @@ struct SyntheticCase {
   int model_replicates = 4;
   std::uint64_t model_seed = 1;
   bool shallow_held_out = false;  // write_design's
+  bool more_gaps = false;         // write_design's
   bool held_out_route = false;    // CalibrationDef's
   bool independent_signatures = CalibrationDef{}.independent_signatures;
   std::vector<std::string> outside;  // key=value planted outside the catalogue (the twin's --set)
@@ -173,7 +176,7 @@ struct SyntheticCase {
 // A twin of the design with `effects` planted (and the case's friction and seeds), calibrated blind.
 SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::string>& effects, int contenders,
                                  const SyntheticCase& c = {}) {
-  write_design(dir / "design.toml", c.model_replicates, c.model_seed, c.shallow_held_out);
+  write_design(dir / "design.toml", c.model_replicates, c.model_seed, c.shallow_held_out, c.more_gaps);
   const DataFile design = load_data_file(dir / "design.toml");
   EvaluatorOptions eo;
   eo.runner = run_synthetic;
@@ -249,14 +252,17 @@ TEST(CalibrationSynthetic, ADragFoundAtAFrictionFarFromTheBaselinesIsMeasuredAga
 // A drag of another form than the catalogue's (quadratic in the speed: here 1.5 steep^2.5 against
 // the linear drag's steep) is read as a linear drag, the nearest catalogue effect; the one size it
 // is given fits no incline, and the form check (form_check.hpp) flags it along the incline, not
-// along the gap, which the drag of either form does not depend on. With 16 model replicates: at 4
-// the surface's own noise hides it more often (twins 3-6 of this design flagged in 4 of 4 at 16
-// replicates; twins 3-5 in 0 of 3 at 4, the adjusted p along the incline 0.06-0.11).
+// along the gap, which the drag of either form does not depend on. On the 15-point design at 16
+// model replicates (on the 9-point one too little residual is left beside the test for its F).
+// Over twins 3-10 (DISABLED_FormCheckRates below): this drag flagged in 7 of 8 at 16 model
+// replicates and 5 of 8 at 4; a linear drag of 4 /s, the catalogue's own form, in 0 of 8.
 TEST(CalibrationSynthetic, ADragOfAnotherFormReadAsLinearDragIsFlaggedByTheFormCheck) {
   TempDir dir("gapflow_calibration_synthetic");
   SyntheticCase c;
-  c.outside = {"particles.quadratic_drag_per_m=1.5"};
-  c.model_replicates = 16;
+  c.outside = {"particles.quadratic_drag_per_m=" + text_knob("GAPFLOW_QUADRATIC_DRAG", "1.5")};
+  c.model_replicates = static_cast<int>(knob("GAPFLOW_MODEL_REPLICATES", 16));
+  c.twin_seed = static_cast<std::uint64_t>(knob("GAPFLOW_TWIN_SEED", 3));
+  c.more_gaps = knob("GAPFLOW_MORE_GAPS", 1) != 0;
   const SyntheticRun run = calibrate_synthetic(dir, {}, 1, c);
   const CalibrationResult& r = run.result;
   ASSERT_EQ(r.effects.size(), 1u) << "the premise: one effect is added\n" << r.verdict << "\n" << run.log;
@@ -437,6 +443,33 @@ TEST(CalibrationSynthetic, TheFirstEffectsResponseIsMeasuredAgainstTheBaselinesR
               std::string::npos)
         << sizes;
   }
+}
+
+// Exploration (disabled: about 16 s a twin): how often the form check flags a drag of the
+// catalogue's own form (a false alarm) or of another form (quadratic in the speed), over twins of
+// the 15-point design. GAPFLOW_SEEDS twins (default 8, seeds 3 on), GAPFLOW_PLANTED
+// ("linear_drag=4" or a quadratic drag's "particles.quadratic_drag_per_m=1.5"),
+// GAPFLOW_MODEL_REPLICATES (default 16). Prints each twin's verdict and the count flagged.
+//   GAPFLOW_PLANTED=linear_drag=4 build/tests/gapflow_tests --gtest_also_run_disabled_tests --gtest_filter='*FormCheckRates*'
+TEST(CalibrationSynthetic, DISABLED_FormCheckRates) {
+  const auto seeds = static_cast<std::uint64_t>(knob("GAPFLOW_SEEDS", 8));
+  const std::string planted = text_knob("GAPFLOW_PLANTED", "linear_drag=4");
+  const bool outside = planted.rfind("particles.", 0) == 0;
+  int flagged = 0, added = 0;
+  for (std::uint64_t seed = 3; seed < 3 + seeds; ++seed) {
+    TempDir dir("gapflow_form_rates");
+    SyntheticCase c;
+    c.twin_seed = seed;
+    c.more_gaps = true;
+    c.model_replicates = static_cast<int>(knob("GAPFLOW_MODEL_REPLICATES", 16));
+    if (outside) c.outside = {planted};
+    const SyntheticRun run = calibrate_synthetic(dir, outside ? std::vector<std::string>{} : std::vector<std::string>{planted}, 1, c);
+    added += !run.result.effects.empty();
+    flagged += run.result.form_differs;
+    std::cout << "twin " << seed << ": " << run.result.verdict << "\n";
+  }
+  std::cout << planted << ": an effect added in " << added << " of " << seeds << ", flagged by the form check in "
+            << flagged << "\n";
 }
 
 // Exploration, not run by default (prints; asserts nothing): the recovered size of a planted drag of

@@ -54,6 +54,19 @@ TEST(Distributions, ChiSquareQuantilesMatchTables) {
   EXPECT_NEAR(regularized_gamma_p(3.0, 20.0), 1.0 - std::exp(-20.0) * (1 + 20 + 200), 1e-14);
 }
 
+TEST(Distributions, FisherFUpperTailMatchesTablesAndItsLimits) {
+  // Quantiles from scipy.stats.f.ppf (scipy 1.10).
+  EXPECT_NEAR(fisher_f_upper(4.9646027437, 1, 10), 0.05, 1e-9);
+  EXPECT_NEAR(fisher_f_upper(3.2317269928, 2, 40), 0.05, 1e-9);
+  EXPECT_NEAR(fisher_f_upper(6.5523125575, 3, 10), 0.01, 1e-9);
+  // F(1, n) is Student's t squared, and d1 F(d1, n) tends to chi^2(d1) as n grows.
+  EXPECT_NEAR(fisher_f_upper(2.5 * 2.5, 1, 7), 2 * (1 - student_t_cdf(2.5, 7)), 1e-12);
+  EXPECT_NEAR(fisher_f_upper(9.0 / 3, 3, 1e7), 1 - chi_square_cdf(9.0, 3), 1e-5);
+  EXPECT_EQ(fisher_f_upper(0, 2, 10), 1.0);
+  EXPECT_TRUE(std::isnan(fisher_f_upper(1, 0, 10)));
+  EXPECT_TRUE(std::isnan(fisher_f_upper(1, 2, -1)));
+}
+
 TEST(Distributions, NormalAndStudentTMatchTables) {
   EXPECT_NEAR(normal_quantile(0.975), 1.959964, 1e-6);
   EXPECT_NEAR(normal_quantile(0.05), -1.644854, 1e-6);
