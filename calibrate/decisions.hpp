@@ -61,8 +61,8 @@
 //    effect stays added (it improved the fit); the verdict flags that its form may be
 //    wrong. A flag, not an attribution: the check names no other effect. It is a third
 //    test after an addition (with the fitted and the held-out chi^2): on a correct
-//    attribution it flags at a rate <= alpha (Bonferroni; conservative, Fisher's F on an
-//    estimated scale), within the same assumptions.
+//    attribution it flags at a rate <= alpha (Bonferroni over its checks, each Fisher's F
+//    against the rest of the residual), within the same assumptions.
 // 4. Which effect to try. The score ranks the candidates by their signatures, linear at
 //    the state the round starts from; where the effect is large or the fitted parameters
 //    sit far from the truth, the linear ranking can name the wrong one (blind pass 10's

@@ -90,7 +90,7 @@ SurfaceSlopes surface_slopes(const DataFile& data, const Surface& surface, const
     const double up_at = inside || at - h <= lo ? at + h : at, dn_at = inside || at + h >= hi ? at - h : at;
     const Prediction up = surface.predict_fit(params.with(key, std::min(up_at, hi)));
     const Prediction dn = surface.predict_fit(params.with(key, std::max(dn_at, lo)));
-    const double width = std::min(up_at, hi) - std::max(dn_at, lo);
+    const double width = inside ? 2 * h : std::min(up_at, hi) - std::max(dn_at, lo);  // 2h: as before one_sided
     if (!(width > 0)) return;
     std::vector<double> d;
     for (std::size_t i = 0; i < data.points.size(); ++i) d.push_back((up.fit[i] - dn.fit[i]) / width);

@@ -47,8 +47,8 @@ FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   Eigen::MatrixXd U = Eigen::MatrixXd::Zero(u.size(), static_cast<Eigen::Index>(kept.size()));
   for (std::size_t l = 0; l < kept.size(); ++l)
     for (Eigen::Index a : *kept[l]) U(a, static_cast<Eigen::Index>(l)) = u(a);
-  // The levels with too few points keep a size of their own, untested: their part of u joins the
-  // fitted directions. Left in u's own column (which X holds), they would be tested as a level.
+  // The levels with too few points share one size, untested: their part of u joins the fitted
+  // directions. Left in u's own column (which X holds), they would be tested as a level.
   Eigen::MatrixXd Xc = X;
   const Eigen::VectorXd rest_of_u = u - U.rowwise().sum();
   if (rest_of_u.norm() > 0) {
@@ -60,18 +60,16 @@ FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   c.levels = static_cast<int>(kept.size());
   c.statistic = b.statistic;
   c.dof = b.dof;
-  // The residual outside the fitted and the tested directions sets the scale, never below the
-  // stated noise; the test is then Fisher's F on (dof, rest_dof). Without rest degrees of freedom,
-  // chi^2 at the stated noise.
+  // The residual outside the fitted and the tested directions sets the scale: under a correct model
+  // S and the rest are sigma^2 chi^2(dof) and sigma^2 chi^2(rest_dof), independent, so their ratio
+  // is Fisher's F for any common sigma, the stated noise right, understated or overstated. Without
+  // rest degrees of freedom there is nothing to scale by: no test.
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Xc);
   c.rest_dof = informative_rows - static_cast<int>(qr.rank()) - b.dof;
-  if (c.rest_dof > 0) {
-    const double rest = (projector_out(Xc) * r).squaredNorm() - b.statistic;
-    c.scale = std::max(1.0, rest / c.rest_dof);
-    c.p = fisher_f_upper(c.statistic / (c.dof * c.scale), c.dof, c.rest_dof);
-  } else {
-    c.p = 1 - chi_square_cdf(c.statistic, c.dof);
-  }
+  if (c.rest_dof <= 0) return FormCheck{};
+  const double rest = (projector_out(Xc) * r).squaredNorm() - b.statistic;
+  c.scale = rest / c.rest_dof;
+  c.p = c.scale > 0 ? fisher_f_upper(c.statistic / (c.dof * c.scale), c.dof, c.rest_dof) : 1.0;
   return c;
 }
 

@@ -11,13 +11,12 @@
 // test (attribution.hpp, score_block) asks whether the residual after the fit wants different sizes
 // at those levels. Every direction the fit used is projected out first (the free parameters, the
 // added effects, a parameter left at an end of its range by a one-sided slope, and the other
-// levels' part of the effect, which keep a size of their own untested), so k tested levels give
-// k - 1 degrees of freedom. The statistic is then compared with the residual outside the fitted
-// and the tested directions: Fisher's F on (k - 1, rest), its scale max(1, rest chi^2 / rest dof),
-// so that a residual beyond the noise everywhere is not read as a form mismatch, and a mismatch
-// does not dilute its own test (it would, divided by the whole chi^2/nu). Never below the stated
-// noise; F's estimated scale makes it conservative where the stated noise is right. The p-values
-// are adjusted (Bonferroni) over every check of the calibration.
+// levels' part of the effect, which share one size, untested), so k tested levels give k - 1
+// degrees of freedom. The statistic is then compared with the residual outside the fitted and the
+// tested directions, Fisher's F on (k - 1, rest): exact for any common scale of the noise, so a
+// residual beyond the stated noise everywhere is not read as a form mismatch, and a mismatch does
+// not dilute its own test (it would, divided by the whole chi^2/nu). Without rest degrees of
+// freedom, no test. The p-values are adjusted (Bonferroni) over every check of the calibration.
 //
 // What it can and cannot see. It is linear, at the fit. It sees a form mismatch only where the
 // design spans conditions over which the two forms part by more than the noise; a mismatch along a
@@ -25,7 +24,7 @@
 // in. It treats the whitened residuals as independent, as every chi^2 of the loop does, though the
 // observables of one design point share their runs (|rho| up to about 0.25 measured; the split by
 // observable contrasts exactly those rows). Its power against a drag of another form was shown on
-// the closed-form model at 16 model replicates, not at the 6 the blind study's design uses. A
+// the closed-form model at 16 and 4 model replicates, not at the 6 the blind study's design uses. A
 // significant check says the effect's one size does not fit the design; it names no other effect.
 #pragma once
 
@@ -50,15 +49,16 @@ struct FormCheck {
   int levels = 0;        // levels tested (each with a size of its own)
   double statistic = 0;  // score statistic on the whitened residual (chi^2-like, dof degrees of freedom)
   int dof = 0;           // degrees of freedom (levels - 1, fewer where the fitted directions mimic a split)
-  int rest_dof = 0;      // degrees of freedom of the residual outside the fitted and tested directions
-  double scale = 1;      // max(1, that residual's chi^2 / rest_dof)
-  double p = 1;          // P(F(dof, rest_dof) > statistic / (dof scale)); chi^2(dof) at scale 1 without rest_dof
+  int rest_dof = 0;      // degrees of freedom of the residual outside the fitted and tested directions (> 0)
+  double scale = 1;      // that residual's chi^2 / rest_dof (1: the stated noise)
+  double p = 1;          // P(F(dof, rest_dof) > statistic / (dof scale))
   double p_adjusted = 1; // p x the number of checks (Bonferroni), at most 1
 };
 
 // One split (exposed for tests): r the whitened residual rows, X the fitted directions (its columns
 // include u), u the effect's column, level the label of each point row (rows beyond it, the
-// measurements', have none), informative_rows the rows that carry a value. dof 0: nothing tested.
+// measurements', have none), informative_rows the rows that carry a value. dof 0: nothing tested
+// (fewer than two levels, a split the fitted directions mimic, or no residual left to scale by).
 FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u,
                       const std::vector<std::string>& level, int informative_rows, const FormCheckDef& def = {});
 

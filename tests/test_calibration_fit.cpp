@@ -1,6 +1,7 @@
 // The effect fit on a response surface: its objective, its restart from the profile scan
 // and its interval.
 #include "calibrate/data_file.hpp"
+#include "calibrate/error_measures.hpp"
 #include "calibrate/fit.hpp"
 #include "test_support.hpp"
 
@@ -42,6 +43,27 @@ Surface flat_surface_with(const std::vector<double>& sizes, const std::vector<st
   for (std::size_t k = 1; k < sizes.size(); ++k) t.add_size(sizes[k], shifts[k], {se, se});
   s.effects.push_back(t);
   return s;
+}
+
+TEST(SurfaceSlopes, AtARangeEndTheSlopeIsOneSidedOrLeftOutAndInsideItIsCentral) {
+  // An effect of size 0..3 whose shifts are linear: 0.5 per unit at point 0, -0.2 at point 1.
+  const DataFile data = two_points(0.0, 0.0, 0.03);
+  const Surface s = flat_surface_with({1.0, 2.0, 3.0}, {{0.5, -0.2}, {1.0, -0.4}, {1.5, -0.6}}, 0.01);
+  auto slope_of = [&](double at, AtRangeEnd mode) -> std::vector<double> {
+    const SurfaceSlopes sl = surface_slopes(data, s, ParameterSet{}.with("k", at), mode);
+    for (std::size_t j = 0; j < sl.keys.size(); ++j)
+      if (sl.keys[j] == "k") return sl.slope[j];
+    return {};
+  };
+  for (double at : {0.0, 1.5, 3.0}) {
+    const std::vector<double> d = slope_of(at, AtRangeEnd::one_sided);
+    ASSERT_EQ(d.size(), 2u) << at;
+    EXPECT_NEAR(d[0], 0.5, 1e-6) << at;
+    EXPECT_NEAR(d[1], -0.2, 1e-6) << at;
+  }
+  EXPECT_TRUE(slope_of(0.0, AtRangeEnd::leave_out).empty());
+  EXPECT_TRUE(slope_of(3.0, AtRangeEnd::leave_out).empty());
+  EXPECT_EQ(slope_of(1.5, AtRangeEnd::leave_out), slope_of(1.5, AtRangeEnd::one_sided));
 }
 
 TEST(ModelNoise, ShareIsTheModelsPartOfEachPointsVarianceMedianOverTheFittedPoints) {

@@ -116,28 +116,50 @@ TEST(FormCheck, ALevelWithTooFewPointsKeepsASizeOfItsOwnUntested) {
   EXPECT_EQ(all.dof, 2);
 }
 
-TEST(FormCheck, TheSplitHoldsItsLevelWhenTheNoiseIsUnderstated) {
-  // Residuals of a correct model whose noise is twice what it states: the chi^2 of the split alone
-  // rejects far too often; tested against the rest of the residual (Fisher's F on its scale) it
-  // holds the level. With the noise as stated, the scale's floor at 1 makes it conservative: about
-  // 1 % here, with 7 degrees of freedom left (F(2, 7)'s tail against chi^2(2)'s); nearer 5 % with
-  // more (a blind design's 44 fitted points leave about 40).
+TEST(FormCheck, TheSplitHoldsItsLevelWhateverTheNoisesCommonScale) {
+  // Residuals of a correct model whose noise is twice, exactly, or half what it states. The chi^2 of
+  // the split alone rejects far too often at twice; tested against the rest of the residual
+  // (Fisher's F on its scale, 8 degrees of freedom left: 12 points - offset - effect - 2 tested) it
+  // holds 5 % at every scale.
   RandomStream rng(17);
   const Eigen::MatrixXd X = fitted_directions(), P = projector_out(X);
   const Eigen::VectorXd u = effect_sensitivity();
   const std::vector<std::string> labels = incline_labels();
-  int chi2_alone = 0, split = 0, as_stated = 0;
+  int chi2_alone = 0;
   const int draws = 4000;
-  for (int k = 0; k < draws; ++k) {
-    const Eigen::VectorXd r = P * (2.0 * unit_noise(rng));
-    chi2_alone += score_block(r, X, split_by_incline()).p < 0.05;
-    split += check_split(r, X, u, labels, kPoints).p < 0.05;
-    as_stated += check_split(P * unit_noise(rng), X, u, labels, kPoints).p < 0.05;
+  for (double sigma : {2.0, 1.0, 0.5}) {
+    int rejected = 0;
+    for (int k = 0; k < draws; ++k) {
+      const Eigen::VectorXd r = P * (sigma * unit_noise(rng));
+      if (sigma == 2.0) chi2_alone += score_block(r, X, split_by_incline()).p < 0.05;
+      const FormCheck c = check_split(r, X, u, labels, kPoints);
+      ASSERT_EQ(c.rest_dof, 8);
+      rejected += c.p < 0.05;
+    }
+    EXPECT_NEAR(static_cast<double>(rejected) / draws, 0.05, 0.012) << "noise " << sigma << " x stated";  // sd 0.34 %
   }
   EXPECT_GT(chi2_alone, 0.3 * draws);
-  EXPECT_NEAR(static_cast<double>(split) / draws, 0.05, 0.012);  // binomial sd 0.34 %
-  EXPECT_LT(as_stated, 0.03 * draws);
-  EXPECT_GT(as_stated, 0.003 * draws);
+}
+
+TEST(FormCheck, RowsWithoutAValueAreNoDegreesOfFreedomAndAMeasurementIsOne) {
+  // 12 point rows, one of them without a value (a row of zeros, as fitted_rows gives it), and a
+  // measurement of the offset as a row of its own: 11 + 1 informative rows, less the offset, the
+  // effect and the 2 tested directions, leave 8.
+  Eigen::MatrixXd X = Eigen::MatrixXd::Zero(kPoints + 1, 2);
+  X.topRows(kPoints) = fitted_directions();
+  X(kPoints, 0) = 1.0;  // the measurement sees the offset only
+  X.row(3).setZero();
+  Eigen::VectorXd u = X.col(1);
+  RandomStream rng(4);
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(kPoints + 1);
+  r.head(kPoints) = unit_noise(rng);
+  r(kPoints) = rng.normal();
+  r(3) = 0;
+  const FormCheck c = check_split(projector_out(X) * r, X, u, incline_labels(), kPoints - 1 + 1);
+  EXPECT_EQ(c.dof, 2);
+  EXPECT_EQ(c.rest_dof, 8);
+  // Nothing left beside the test: no test.
+  EXPECT_EQ(check_split(projector_out(X) * r, X, u, incline_labels(), 4).dof, 0);
 }
 
 TEST(FormCheck, AnyAdjustedPBelowAlphaFlagsTheForm) {
