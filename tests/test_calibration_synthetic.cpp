@@ -254,8 +254,9 @@ TEST(CalibrationSynthetic, ADragFoundAtAFrictionFarFromTheBaselinesIsMeasuredAga
 // is given fits no incline, and the form check (form_check.hpp) flags it along the incline, not
 // along the gap, which the drag of either form does not depend on. On the 15-point design at 16
 // model replicates (on the 9-point one too little residual is left beside the test for its F).
-// Over twins 3-10 (DISABLED_FormCheckRates below): this drag flagged in 7 of 8 at 16 model
-// replicates and 5 of 8 at 4; a linear drag of 4 /s, the catalogue's own form, in 0 of 8.
+// Over twins 3-10 (DISABLED_FormCheckRates below, a456b2f): this drag flagged in 8 of 8 at 16 model
+// replicates and 6 of 8 at 4; a linear drag of 4 /s, the catalogue's own form, in 1 of 8
+// (results/calibration-blind-pass20/replay-formcheck/closed_form_rates.txt).
 TEST(CalibrationSynthetic, ADragOfAnotherFormReadAsLinearDragIsFlaggedByTheFormCheck) {
   TempDir dir("gapflow_calibration_synthetic");
   SyntheticCase c;
