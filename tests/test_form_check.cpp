@@ -141,10 +141,11 @@ TEST(FormCheck, TheSplitHoldsItsLevelWhateverTheNoisesCommonScale) {
   EXPECT_GT(chi2_alone, 0.3 * draws);
 }
 
-TEST(FormCheck, RowsWithoutAValueAreNoDegreesOfFreedomAndAMeasurementIsOne) {
+TEST(FormCheck, TheRestsDegreesOfFreedomAreTheInformativeRowsLessTheFittedAndTestedDirections) {
   // 12 point rows, one of them without a value (a row of zeros, as fitted_rows gives it), and a
-  // measurement of the offset as a row of its own: 11 + 1 informative rows, less the offset, the
-  // effect and the 2 tested directions, leave 8.
+  // measurement of the offset as a row of its own: 11 + 1 informative rows (the count fitted_rows
+  // makes; given here), less the offset, the effect and the 2 tested directions, leave 8. The zero
+  // row and the measurement row change neither the split's degrees of freedom nor the rank.
   Eigen::MatrixXd X = Eigen::MatrixXd::Zero(kPoints + 1, 2);
   X.topRows(kPoints) = fitted_directions();
   X(kPoints, 0) = 1.0;  // the measurement sees the offset only
