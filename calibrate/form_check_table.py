@@ -2,31 +2,41 @@
 """The form check (calibrate/form_check.hpp) over a blind pass: per calibration, what was planted and
 added, the verdict, and the check with the smallest adjusted p; then the counts a pass's README quotes
 (flags on identified twins whose planted effect was the one tried: false alarms for a catalogue
-effect; flags on the other calibrations). With REFERENCE (another folder of the same twins, e.g. the pass itself or a replay
-without the check), also whether each calibration added the same effects with the same sizes.
+effect; flags on the other calibrations). With REFERENCE (another folder of the same twins, e.g. the
+pass itself or a replay without the check), also whether each calibration added the same effects with
+the same sizes.
 
     /usr/bin/python3 calibrate/form_check_table.py PASS [REFERENCE]
 """
-import csv
 import json
 import sys
 from pathlib import Path
 
+from blind_pass import cases_table
+
+
+def smallest_check(summary):
+    """The check with the smallest adjusted p, as text: its effect and split, the score statistic S with
+    its degrees of freedom, and the scale of the rest of the residual with the rest's degrees of freedom
+    (p is of S / (dof x scale) against Fisher's F on those two)."""
+    checks = summary.get("form_checks", [])
+    if not checks:
+        return "no check"
+    k = min(checks, key=lambda c: c["p_adjusted"])
+    return (f"{k['p_adjusted']:.3g} ({k['effect']} split by {k['column']}: S {k['statistic']:.1f} on {k['dof']} dof; "
+            f"rest scale {k['scale']:.2f} on {k['rest_dof']} dof)")
+
 
 def main(folder, reference=None):
     folder = Path(folder)
-    with open(folder / "cases.csv", newline="") as f:
-        cases = {r["case"]: r for r in csv.DictReader(f)}
     flagged_found, flagged_other, found, changed = [], [], 0, []
-    print("| case | planted | added | verdict | smallest adjusted p (effect, split by, statistic / scale on dof) |")
+    print("| case | planted | added | verdict | smallest adjusted p of the form check |")
     print("|---|---|---|---|---|")
-    for case, row in sorted(cases.items()):
+    for row in sorted(cases_table(folder), key=lambda r: r["case"]):
+        case = row["case"]
         s = json.loads((folder / case / "summary.json").read_text())
-        checks = s.get("form_checks", [])
-        best = min(checks, key=lambda k: k["p_adjusted"]) if checks else None
-        text = (f"{best['p_adjusted']:.3g} ({best['effect']}, {best['column']}, {best['statistic']:.1f} / "
-                f"{best['scale']:.2f} on {best['dof']})" if best else "no check")
-        print(f"| {case} | {row['planted'] or row['truth']} | {row['added'] or '-'} | {s['verdict']} | {text} |")
+        print(f"| {case} | {row['planted'] or row['truth']} | {row['added'] or '-'} | {s['verdict']} | "
+              f"{smallest_check(s)} |")
         # A false alarm only where the planted effect itself was tried (not another for its group).
         tried_planted = row["identified"] == "True" and row["tried_planted"] == "True"
         found += tried_planted

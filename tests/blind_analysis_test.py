@@ -87,7 +87,11 @@ CASES = {
                                 "effect found; its size differs across the design: an effect of another form may be acting",
                                 fitted_chi2=95.0, fitted_p=0.01,
                                 first_round=[("rolling_resistance", 0.2), ("linear_drag", 0.001)]),
-                      "form_differs": True}, ""),
+                      "form_differs": True,
+                      "form_checks": [{"effect": "linear_drag", "column": "incline_deg", "levels": 3, "statistic": 14.0,
+                                       "dof": 2, "rest_dof": 41, "scale": 1.25, "p": 0.005, "p_adjusted": 0.02},
+                                      {"effect": "linear_drag", "column": "W_over_d", "levels": 3, "statistic": 1.0,
+                                       "dof": 2, "rest_dof": 41, "scale": 1.3, "p": 0.7, "p_adjusted": 1.0}]}, ""),
     # Invisible (power 0.1) and rightly "none".
     "rolling-low": (truth("rolling-low", [ROLL], power=0.1, chi2=1.0),
                     summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), ""),
@@ -271,6 +275,18 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("held-out excess after the fit, summed over the 2 cases found in both, 2.8", out)
         self.assertIn("rose in 1, fell in 0, unchanged in 1", out)
         self.assertEqual(run("replay_compare.py", self.pass_dir)[0], 2)
+
+    def test_form_check_table_names_each_smallest_check_and_counts_false_alarms_apart(self):
+        code, out, _ = run("form_check_table.py", self.pass_dir, self.pass_dir)
+        self.assertEqual(code, 0)
+        self.assertIn("| 0.02 (linear_drag split by incline_deg: S 14.0 on 2 dof; rest scale 1.25 on 41 dof) |", out)
+        self.assertIn("| drag-low |", out)
+        self.assertIn("no check", out)
+        # rolling-high was found through drag's group: its flag is not a false alarm for a catalogue effect.
+        self.assertIn("the planted effect tried, flagged (false alarms for a catalogue effect): 0 of 1 []", out)
+        self.assertIn("other calibrations flagged: ['rolling-high']", out)
+        self.assertIn("effects or sizes differing from", out)
+        self.assertIn(": none", out)
 
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)

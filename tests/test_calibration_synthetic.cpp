@@ -38,7 +38,9 @@ using testing::TempDir;
 // twin of it); rolling resistance mu_r more on the shallow board. Every other catalogue effect
 // moves nothing. A drag outside the catalogue, quadratic in the speed (particles.quadratic_drag_per_m,
 // c in 1/m), slows the flow as -0.06 c steep^2.5: per unit of a linear drag's effect it grows with the
-// board's steepness, as a force c v^2 = (c v) v does with the speed (form_check.hpp's case).
+// board's steepness, as a force c v^2 = (c v) v does with the speed (form_check.hpp's case). The
+// exponent is a stand-in chosen to part from the linear form with the incline, not derived from the
+// simulator's mechanics.
 // Noise: a part common to every parameter value of the same seed, replicate and
 // point (common random numbers) and a part of its own at every parameter value (as a simulator's
 // chaotic dynamics give), so paired differences have noise too.
