@@ -580,7 +580,9 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.after.simulated_fresh = fresh[1];
 
   out.held_out_fresh_fit_aware = held_out_fit_aware(data, surface, out.after, fresh[1]);
-  out.form_checks = form_checks(data, surface, out.after);
+  FormCheckDef form;
+  form.alpha = def.alpha;
+  out.form_checks = form_checks(data, surface, out.after, form);
   out.form_differs = form_differs(out.form_checks, def.alpha);
   const VerdictEvidence evidence{.attribution_allowed = def.max_effects > 0,
                                  .effects_added = static_cast<int>(out.effects.size()),

@@ -3,7 +3,9 @@
 #include "calibrate/effect_catalogue.hpp"
 #include "common/statistics.hpp"
 
+#include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/distributions/non_central_chi_squared.hpp>
+#include <boost/math/distributions/non_central_f.hpp>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -24,22 +26,47 @@ double chi_square_test_power(double lambda, double dof, double alpha) {
   return boost::math::cdf(boost::math::complement(dist, critical));
 }
 
+namespace {
+
+// The smallest lambda at which power_at(lambda), rising with lambda, reaches `power` (bisection to
+// a relative 1e-9); infinite where no lambda up to 1e9 does.
+template <class PowerAt>
+double smallest_noncentrality_with(PowerAt power_at, double power) {
+  double lo = 0, hi = 1;
+  while (power_at(hi) < power && hi < 1e9) hi *= 2;
+  if (power_at(hi) < power) return kInfinity;
+  for (int i = 0; i < 100 && hi - lo > 1e-9 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (power_at(mid) < power ? lo : hi) = mid;
+  }
+  return hi;
+}
+
+}  // namespace
+
 double min_detectable_noncentrality(double dof, double alpha, double score_alpha, double power) {
   // No residual degrees of freedom: the chi^2 gate never rejects (chi_square_of gives p = 1), so
   // the loop attributes nothing at any size. Invalid levels or power: nothing to compute.
   if (!(dof > 0) || !(alpha > 0 && alpha < 1) || !(score_alpha > 0 && score_alpha < 1) || !(power > 0 && power < 1))
     return kInfinity;
-  const auto both = [&](double lambda) {
-    return std::min(chi_square_test_power(lambda, dof, alpha), chi_square_test_power(lambda, 1, score_alpha));
-  };
-  double lo = 0, hi = 1;
-  while (both(hi) < power && hi < 1e9) hi *= 2;  // both powers rise with lambda
-  if (both(hi) < power) return kInfinity;
-  for (int i = 0; i < 100 && hi - lo > 1e-9 * hi; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (both(mid) < power ? lo : hi) = mid;
-  }
-  return hi;
+  return smallest_noncentrality_with(
+      [&](double lambda) {
+        return std::min(chi_square_test_power(lambda, dof, alpha), chi_square_test_power(lambda, 1, score_alpha));
+      },
+      power);
+}
+
+double f_test_power(double lambda, double d1, double d2, double alpha) {
+  if (!(d1 > 0) || !(d2 > 0) || !(alpha > 0 && alpha < 1) || std::isnan(lambda))
+    return std::numeric_limits<double>::quiet_NaN();
+  const double critical = boost::math::quantile(boost::math::complement(boost::math::fisher_f(d1, d2), alpha));
+  if (lambda <= 0) return alpha;
+  return boost::math::cdf(boost::math::complement(boost::math::non_central_f(d1, d2, lambda), critical));
+}
+
+double min_detectable_noncentrality_f(double d1, double d2, double alpha, double power) {
+  if (!(d1 > 0) || !(d2 > 0) || !(alpha > 0 && alpha < 1) || !(power > 0 && power < 1)) return kInfinity;
+  return smallest_noncentrality_with([&](double lambda) { return f_test_power(lambda, d1, d2, alpha); }, power);
 }
 
 namespace {

@@ -41,6 +41,16 @@ double chi_square_test_power(double lambda, double dof, double alpha);
 // rejects: chi_square_of gives p = 1) or when the levels or the power are not in (0, 1).
 double min_detectable_noncentrality(double dof, double alpha, double score_alpha, double power);
 
+// P(F(d1, d2; lambda) > the central F's quantile 1 - alpha): the power of Fisher's F test at level
+// alpha against a noncentrality lambda in its numerator (boost::math::non_central_f), the
+// denominator an independent chi^2(d2) / d2 of the same scale. NaN for d1 or d2 <= 0 or alpha
+// outside (0, 1).
+double f_test_power(double lambda, double d1, double d2, double alpha);
+
+// The smallest lambda at which that F test reaches `power`. Infinite where it cannot (d1 or d2
+// <= 0, alpha or power outside (0, 1)).
+double min_detectable_noncentrality_f(double d1, double d2, double alpha, double power);
+
 struct Detectability {
   std::string effect, unit;
   double neutral = 0;          // the template's value (key units)

@@ -2,12 +2,15 @@
 
 #include "calibrate/attribution.hpp"
 #include "calibrate/calibration.hpp"
+#include "calibrate/detectability.hpp"
 #include "calibrate/error_measures.hpp"
 #include "calibrate/fit.hpp"
 #include "common/statistics.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <limits>
 #include <map>
 
 namespace gapflow {
@@ -31,6 +34,29 @@ std::vector<std::pair<std::string, std::vector<std::string>>> partitions(const D
   return out;
 }
 
+// Each kept level's place on a straight trend, 0 at the lowest level and 1 at the highest: by the
+// level's value where every label is a number, by label order where two are not; empty where more
+// than two are not (no order to trend along) or all values are equal.
+std::vector<double> trend_of(const std::vector<std::string>& labels) {
+  std::vector<double> x;
+  for (const std::string& label : labels) {
+    char* end = nullptr;
+    const double v = std::strtod(label.c_str(), &end);
+    if (label.empty() || *end != '\0' || !std::isfinite(v)) {
+      x.clear();
+      break;
+    }
+    x.push_back(v);
+  }
+  if (x.empty() && labels.size() == 2) return {0.0, 1.0};
+  if (x.empty()) return {};
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  if (!(*hi > *lo)) return {};
+  const double low = *lo, width = *hi - *lo;
+  for (double& v : x) v = (v - low) / width;
+  return x;
+}
+
 }  // namespace
 
 FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u,
@@ -41,8 +67,12 @@ FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   for (std::size_t a = 0; a < level.size() && a < static_cast<std::size_t>(u.size()); ++a)
     if (u(static_cast<Eigen::Index>(a)) != 0) rows[level[a]].push_back(static_cast<Eigen::Index>(a));
   std::vector<const std::vector<Eigen::Index>*> kept;
+  std::vector<std::string> kept_labels;
   for (const auto& [name, at] : rows)
-    if (static_cast<int>(at.size()) >= def.min_points_per_level) kept.push_back(&at);
+    if (static_cast<int>(at.size()) >= def.min_points_per_level) {
+      kept.push_back(&at);
+      kept_labels.push_back(name);
+    }
   if (kept.size() < 2) return c;
   Eigen::MatrixXd U = Eigen::MatrixXd::Zero(u.size(), static_cast<Eigen::Index>(kept.size()));
   for (std::size_t l = 0; l < kept.size(); ++l)
@@ -67,10 +97,22 @@ FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Xc);
   c.rest_dof = informative_rows - static_cast<int>(qr.rank()) - b.dof;
   if (c.rest_dof <= 0) return FormCheck{};
-  const double rest = (projector_out(Xc) * r).squaredNorm() - b.statistic;
+  const Eigen::MatrixXd P = projector_out(Xc);
+  const double rest = (P * r).squaredNorm() - b.statistic;
   c.scale = rest / c.rest_dof;
-  c.p = c.scale > 0 ? fisher_f_upper(c.statistic / (c.dof * c.scale), c.dof, c.rest_dof) : 1.0;
+  // No rest at all (to rounding) leaves the statistic unscaled: infinite F where there is one.
+  c.p = c.scale > 0 ? fisher_f_upper(c.statistic / (c.dof * c.scale), c.dof, c.rest_dof) : (c.statistic > 0 ? 0.0 : 1.0);
+  const std::vector<double> trend = trend_of(kept_labels);
+  c.trend_noncentrality = trend.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                        : (P * U * Eigen::Map<const Eigen::VectorXd>(trend.data(), U.cols())).squaredNorm();
   return c;
+}
+
+double detectable_spread(const FormCheck& c, double departure, double alpha, double power) {
+  if (std::isnan(c.trend_noncentrality)) return c.trend_noncentrality;
+  const double per_unit = c.trend_noncentrality * departure * departure;  // lambda at spread 1
+  if (!(per_unit > 0)) return std::numeric_limits<double>::infinity();
+  return std::sqrt(min_detectable_noncentrality_f(c.dof, c.rest_dof, alpha, power) / per_unit);
 }
 
 std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface, const ModelState& after,
@@ -81,6 +123,7 @@ std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface,
   const SurfaceSlopes slopes = surface_slopes(data, surface, after.params, AtRangeEnd::one_sided);
   const FittedRows f = fitted_rows(data, surface, after, slopes);
   const auto parts = partitions(data, f.points);
+  std::vector<double> departure;  // of each check's effect, key units
   for (const EffectTerm& e : surface.effects) {
     const auto at = std::find(slopes.keys.begin(), slopes.keys.end(), e.key);
     if (at == slopes.keys.end()) continue;  // no slope (a range of zero width)
@@ -91,9 +134,15 @@ std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface,
       c.effect = e.effect;
       c.column = column;
       checks.push_back(c);
+      departure.push_back(after.params.get(e.key, e.neutral) - e.neutral);
     }
   }
-  for (FormCheck& c : checks) c.p_adjusted = std::min(1.0, c.p * static_cast<double>(checks.size()));
+  const double m = static_cast<double>(checks.size());
+  for (std::size_t i = 0; i < checks.size(); ++i) {
+    FormCheck& c = checks[i];
+    c.p_adjusted = std::min(1.0, c.p * m);
+    c.detectable_spread = detectable_spread(c, departure[i], def.alpha / m, def.power);
+  }
   return checks;
 }
 

@@ -26,6 +26,11 @@
 // observable contrasts exactly those rows). Its power against a drag of another form was shown on
 // the closed-form model at 16 and 4 model replicates, not at the 6 the blind study's design uses. A
 // significant check says the effect's one size does not fit the design; it names no other effect.
+// A check that flags nothing says only as much as its power: each check states the smallest spread
+// of sizes across its column that it would flag with power 0.8 at the stated noise (a trend
+// straight in the level's value; exact by the noncentral F), so that a reader can set it against
+// what another form would need (a drag k v^2 read as linear needs a spread of about the spheres'
+// relative speed difference across the column).
 #pragma once
 
 #include <Eigen/Dense>
@@ -41,6 +46,8 @@ struct ModelState;
 
 struct FormCheckDef {
   int min_points_per_level = 2;  // fitted points the effect moves that a level needs to be tested
+  double alpha = 0.05;           // the loop's level, shared by the checks (Bonferroni)
+  double power = 0.8;            // the power at which a spread of sizes counts as detectable
 };
 
 struct FormCheck {
@@ -53,6 +60,15 @@ struct FormCheck {
   double scale = 1;      // that residual's chi^2 / rest_dof (1: the stated noise)
   double p = 1;          // P(F(dof, rest_dof) > statistic / (dof scale))
   double p_adjusted = 1; // p x the number of checks (Bonferroni), at most 1
+  // What the check could see. A trend: the effect's departure from neutral straight in the level's
+  // value (in level order where a column has two levels that are not numbers), differing by a
+  // fraction `spread` of the fitted departure between the lowest and the highest level.
+  double trend_noncentrality = 0;  // lambda of that trend per unit spread and per key unit^2 of departure
+                                   // (|P U c|^2, whitened); NaN: levels with no order to trend along
+  double detectable_spread = 0;    // the smallest spread the check flags with power `power` at the
+                                   // stated noise (1 = the departure doubles across the column);
+                                   // infinite where no spread can be seen (the fitted size at
+                                   // neutral, or the trend taken in by the fitted directions); NaN: no order
 };
 
 // One split (exposed for tests): r the whitened residual rows, X the fitted directions (its columns
@@ -62,8 +78,14 @@ struct FormCheck {
 FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u,
                       const std::vector<std::string>& level, int informative_rows, const FormCheckDef& def = {});
 
-// Every check of the final state `after` on `surface` (its effects the added ones); none without
-// an added effect.
+// The smallest spread (FormCheck::detectable_spread) the check `c` flags with `power` at level
+// `alpha` (the check's share of the Bonferroni level), for a fitted departure from neutral of
+// `departure` key units: sqrt(lambda* / (trend_noncentrality departure^2)), lambda* the F test's
+// smallest noncentrality with that power. Infinite where the trend moves nothing; NaN with no order.
+double detectable_spread(const FormCheck& c, double departure, double alpha, double power);
+
+// Every check of the final state `after` on `surface` (its effects the added ones), with each one's
+// detectable spread at the Bonferroni level over them all; none without an added effect.
 std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface, const ModelState& after,
                                    const FormCheckDef& def = {});
 

@@ -172,7 +172,7 @@ struct SyntheticCase {
   bool more_gaps = false;         // write_design's
   bool held_out_route = false;    // CalibrationDef's
   bool independent_signatures = CalibrationDef{}.independent_signatures;
-  std::vector<std::string> outside;  // key=value planted outside the catalogue (the twin's --set)
+  std::vector<std::string> outside = {};  // key=value planted outside the catalogue (the twin's --set)
 };
 
 // A twin of the design with `effects` planted (and the case's friction and seeds), calibrated blind.
@@ -272,8 +272,12 @@ TEST(CalibrationSynthetic, ADragOfAnotherFormReadAsLinearDragIsFlaggedByTheFormC
   EXPECT_TRUE(r.form_differs);
   EXPECT_EQ(r.verdict, "effect found; its size differs across the design: an effect of another form may be acting");
   for (const FormCheck& k : r.form_checks) {
-    if (k.column == "incline_deg") EXPECT_LT(k.p_adjusted, 0.05) << k.statistic << " / " << k.scale << " on " << k.dof;
-    if (k.column == "W_over_d") EXPECT_GT(k.p_adjusted, 0.05) << k.statistic << " / " << k.scale << " on " << k.dof;
+    if (k.column == "incline_deg") {
+      EXPECT_LT(k.p_adjusted, 0.05) << k.statistic << " / " << k.scale << " on " << k.dof;
+    }
+    if (k.column == "W_over_d") {
+      EXPECT_GT(k.p_adjusted, 0.05) << k.statistic << " / " << k.scale << " on " << k.dof;
+    }
   }
   EXPECT_EQ(r.form_checks.size(), 2u);
 }

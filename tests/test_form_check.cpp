@@ -163,6 +163,57 @@ TEST(FormCheck, TheRestsDegreesOfFreedomAreTheInformativeRowsLessTheFittedAndTes
   EXPECT_EQ(check_split(projector_out(X) * r, X, u, incline_labels(), 4).dof, 0);
 }
 
+TEST(FormCheck, ASpreadAtTheDetectableSpreadIsFlaggedWithTheStatedPower) {
+  // The effect's departure 2 key units at the shallowest incline, growing straight with the
+  // incline's value by a fraction `spread` of it across the three levels; the fit takes one size
+  // and the offset, the check tests the split against the rest of the residual (rest dof 8). At
+  // the spread the check states it flags with power 0.8, 4000 draws reject at its level 80 % of
+  // the time (binomial sd 0.6 %): the noncentral F and the trend's noncentrality agree with what the
+  // check does.
+  const double departure = 2, alpha = 0.05;
+  const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
+  const Eigen::VectorXd u = effect_sensitivity();
+  RandomStream rng(17);
+  FormCheck design = check_split(P * unit_noise(rng), X, u, incline_labels(), kPoints);
+  ASSERT_EQ(design.dof, 2);
+  ASSERT_EQ(design.rest_dof, 8);
+  const double spread = detectable_spread(design, departure, alpha, 0.8);
+  ASSERT_TRUE(std::isfinite(spread));
+  const Eigen::Vector3d sizes = departure * Eigen::Vector3d(1, 1 + spread / 2, 1 + spread);
+  int flagged = 0;
+  const int draws = 4000;
+  for (int k = 0; k < draws; ++k)
+    flagged += check_split(P * (U * sizes + unit_noise(rng)), X, u, incline_labels(), kPoints).p < alpha;
+  EXPECT_NEAR(static_cast<double>(flagged) / draws, 0.8, 0.025) << "spread " << spread;
+  // Twice the departure, half the spread; a check made at a stricter level needs more.
+  EXPECT_NEAR(detectable_spread(design, 2 * departure, alpha, 0.8), spread / 2, 1e-6 * spread);
+  EXPECT_GT(detectable_spread(design, departure, alpha / 10, 0.8), spread);
+}
+
+TEST(FormCheck, ASpreadIsUnseenWhereTheSizeSitsAtNeutralOrTheLevelsHaveNoOrder) {
+  RandomStream rng(19);
+  const Eigen::MatrixXd X = fitted_directions();
+  const FormCheck c = check_split(projector_out(X) * unit_noise(rng), X, effect_sensitivity(), incline_labels(), kPoints);
+  EXPECT_TRUE(std::isinf(detectable_spread(c, 0.0, 0.05, 0.8)));  // no departure to spread
+  // Three levels that are not numbers: no trend to test against.
+  std::vector<std::string> named(kPoints);
+  for (int i = 0; i < kPoints; ++i) named[i] = std::string(1, static_cast<char>('x' + level(i)));
+  const FormCheck unordered = check_split(projector_out(X) * unit_noise(rng), X, effect_sensitivity(), named, kPoints);
+  ASSERT_EQ(unordered.dof, 2);
+  EXPECT_TRUE(std::isnan(detectable_spread(unordered, 1.0, 0.05, 0.8)));
+}
+
+TEST(FormCheck, AResidualWhollyInTheSplitIsAMismatchNotNoise) {
+  // No noise at all: the residual is the split's own (sizes 1, 3, 6), the rest zero to rounding
+  // (here about 1e-15 above it; where rounding leaves it at or below zero, check_split reads the F
+  // as infinite rather than giving p = 1, a branch this case does not reach).
+  const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
+  const FormCheck c = check_split(P * U * Eigen::Vector3d(1, 3, 6), X, effect_sensitivity(), incline_labels(), kPoints);
+  ASSERT_EQ(c.dof, 2);
+  EXPECT_GT(c.statistic, 1);
+  EXPECT_LT(c.p, 1e-6) << "scale " << c.scale;
+}
+
 TEST(FormCheck, AnyAdjustedPBelowAlphaFlagsTheForm) {
   std::vector<FormCheck> checks(2);
   checks[0].p_adjusted = 0.2;
