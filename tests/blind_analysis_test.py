@@ -89,9 +89,11 @@ CASES = {
                                 first_round=[("rolling_resistance", 0.2), ("linear_drag", 0.001)]),
                       "form_differs": True,
                       "form_checks": [{"effect": "linear_drag", "column": "incline_deg", "levels": 3, "statistic": 14.0,
-                                       "dof": 2, "rest_dof": 41, "scale": 1.25, "p": 0.005, "p_adjusted": 0.02},
+                                       "dof": 2, "rest_dof": 41, "scale": 1.25, "p": 0.005, "p_adjusted": 0.02,
+                                       "detectable_spread": 0.904},
                                       {"effect": "linear_drag", "column": "W_over_d", "levels": 3, "statistic": 1.0,
-                                       "dof": 2, "rest_dof": 41, "scale": 1.3, "p": 0.7, "p_adjusted": 1.0}]}, ""),
+                                       "dof": 2, "rest_dof": 41, "scale": 1.3, "p": 0.7, "p_adjusted": 1.0,
+                                       "detectable_spread": None}]}, ""),
     # Invisible (power 0.1) and rightly "none".
     "rolling-low": (truth("rolling-low", [ROLL], power=0.1, chi2=1.0),
                     summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), ""),
@@ -282,11 +284,43 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("| 0.02 (linear_drag split by incline_deg: S 14.0 on 2 dof; rest scale 1.25 on 41 dof) |", out)
         self.assertIn("| drag-low |", out)
         self.assertIn("no check", out)
+        self.assertIn("| incline_deg 90 %; W_over_d none or no order |", out)
         # rolling-high was found through drag's group: its flag is not a false alarm for a catalogue effect.
         self.assertIn("the planted effect tried, flagged (false alarms for a catalogue effect): 0 of 1 []", out)
         self.assertIn("other calibrations flagged: ['rolling-high']", out)
         self.assertIn("effects or sizes differing from", out)
         self.assertIn(": none", out)
+
+    def test_quadratic_drag_visibility_reads_the_speed_scaling_and_the_checks_power(self):
+        import math
+        root = Path(self.tmp.name) / "quadratic"
+        (root / "pass" / "twins").mkdir(parents=True, exist_ok=True)
+        # J_mid exactly as sqrt(sin theta) at one gap (spread 0.429), and an obstruction point and an
+        # other observable that must be left out.
+        points = [f"[[point]]\nW_over_d = 4.5\nincline_deg = {t}\nshape = \"none\"\nvalue = {100 * math.sqrt(math.sin(math.radians(t)))}\n"
+                  for t in (5.0, 8.0, 12.0)]
+        points.append("[[point]]\nW_over_d = 4.5\nincline_deg = 12.0\nshape = \"V\"\nvalue = 900.0\n")
+        points.append("[[point]]\nW_over_d = 4.5\nincline_deg = 12.0\nshape = \"none\"\nobservable = \"exit_spread\"\nvalue = 0.1\n")
+        (root / "pass" / "twins" / "null-1.toml").write_text("[observable]\nkind = \"j_mid\"\n\n" + "\n".join(points))
+        case = root / "replay" / "outside-quadratic-16"
+        case.mkdir(parents=True, exist_ok=True)
+        needed = (math.sqrt(math.sin(math.radians(12))) - math.sqrt(math.sin(math.radians(5)))) / (
+            sum(math.sqrt(math.sin(math.radians(t))) for t in (5, 8, 12)) / 3)
+        checks = [{"effect": "linear_drag", "column": "incline_deg", "dof": 2, "rest_dof": 41, "p_adjusted": 0.9,
+                   "detectable_spread": needed},
+                  {"effect": "linear_drag", "column": "W_over_d", "dof": 2, "rest_dof": 41, "p_adjusted": 1.0,
+                   "detectable_spread": 2 * needed}]
+        (case / "summary.json").write_text(json.dumps({"form_checks": checks}))
+        code, out, err = run("quadratic_drag_visibility.py", root / "pass", root / "replay")
+        self.assertEqual(code, 0, err)
+        self.assertIn(f"median {needed:.3f} (range {needed:.3f}-{needed:.3f}; sqrt(sin theta) predicts {needed:.3f})", out)
+        # At its own detectable spread the check has power 0.8, at level 0.05 / 2 checks.
+        self.assertIn(f"at level 0.025, F on 2 and 41 dof); adjusted p 0.9; power at the spread a quadratic drag asks for "
+                      f"({needed:.3f}): 0.80; power 0.8 there needs 1.0 x", out)
+        checks[0]["detectable_spread"] = 2 * needed  # half the spread seen: lambda / 4
+        (case / "summary.json").write_text(json.dumps({"form_checks": checks}))
+        self.assertIn("needs 4.0 x the information", run("quadratic_drag_visibility.py", root / "pass", root / "replay")[1])
+        self.assertEqual(run("quadratic_drag_visibility.py", root / "replay", root / "replay")[0], 2)  # no null twin
 
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)
