@@ -92,7 +92,8 @@ void write_form_checks_md(std::ostream& o, const CalibrationResult& r) {
        "mismatch only along what the design varies. *Detectable spread*: what the check could see, the smallest "
        "difference of the effect's departure from neutral between the column's lowest and highest level, as a share of "
        "the fitted departure, that it flags with power 0.8 at the stated noise (a trend straight in the level's value; "
-       "100 % = the departure doubles across the column). A drag k v^2 read as a linear drag needs about the spheres' "
+       "100 %: the ends differ by the fitted departure; where the scale is below 1 the noise is smaller than stated and "
+       "the spread smaller by sqrt(scale)). A drag k v^2 read as a linear drag needs about the spheres' "
        "relative speed difference across the column.\n\n| effect | split by | levels | statistic | dof | rest dof | "
        "scale | p | adjusted p | detectable spread |\n|---|---|---|---|---|---|---|---|---|---|\n";
   for (const FormCheck& c : r.form_checks)
@@ -139,9 +140,10 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
   o << fmt::format("  \"form_differs\": {},\n  \"form_checks\": [", r.form_differs ? "true" : "false");
   for (std::size_t i = 0; i < r.form_checks.size(); ++i) {
     const FormCheck& c = r.form_checks[i];
-    o << fmt::format(R"({}{{"effect": {}, "column": {}, "levels": {}, "statistic": {}, "dof": {}, "rest_dof": {}, "scale": {}, "p": {}, "p_adjusted": {}, "detectable_spread": {}}})",
+    o << fmt::format(R"({}{{"effect": {}, "column": {}, "levels": {}, "statistic": {}, "dof": {}, "rest_dof": {}, "scale": {}, "p": {}, "p_adjusted": {}, "trend_ordered": {}, "spread_level": {}, "detectable_spread": {}}})",
                      i ? ", " : "", json_string(c.effect), json_string(c.column), c.levels, json_number(c.statistic),
                      c.dof, c.rest_dof, json_number(c.scale), json_number(c.p), json_number(c.p_adjusted),
+                     std::isnan(c.trend_noncentrality) ? "false" : "true", json_number(c.spread_level),
                      json_number(c.detectable_spread));
   }
   o << "],\n";

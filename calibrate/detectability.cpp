@@ -56,17 +56,31 @@ double min_detectable_noncentrality(double dof, double alpha, double score_alpha
       power);
 }
 
-double f_test_power(double lambda, double d1, double d2, double alpha) {
-  if (!(d1 > 0) || !(d2 > 0) || !(alpha > 0 && alpha < 1) || std::isnan(lambda))
-    return std::numeric_limits<double>::quiet_NaN();
-  const double critical = boost::math::quantile(boost::math::complement(boost::math::fisher_f(d1, d2), alpha));
+namespace {
+
+// The F test's power against lambda, its critical value given.
+double f_power_beyond(double critical, double lambda, double d1, double d2, double alpha) {
   if (lambda <= 0) return alpha;
   return boost::math::cdf(boost::math::complement(boost::math::non_central_f(d1, d2, lambda), critical));
 }
 
+double f_critical(double d1, double d2, double alpha) {
+  return boost::math::quantile(boost::math::complement(boost::math::fisher_f(d1, d2), alpha));
+}
+
+}  // namespace
+
+double f_test_power(double lambda, double d1, double d2, double alpha) {
+  if (!(d1 > 0) || !(d2 > 0) || !(alpha > 0 && alpha < 1) || std::isnan(lambda))
+    return std::numeric_limits<double>::quiet_NaN();
+  return f_power_beyond(f_critical(d1, d2, alpha), lambda, d1, d2, alpha);
+}
+
 double min_detectable_noncentrality_f(double d1, double d2, double alpha, double power) {
   if (!(d1 > 0) || !(d2 > 0) || !(alpha > 0 && alpha < 1) || !(power > 0 && power < 1)) return kInfinity;
-  return smallest_noncentrality_with([&](double lambda) { return f_test_power(lambda, d1, d2, alpha); }, power);
+  const double critical = f_critical(d1, d2, alpha);
+  return smallest_noncentrality_with([&](double lambda) { return f_power_beyond(critical, lambda, d1, d2, alpha); },
+                                     power);
 }
 
 namespace {

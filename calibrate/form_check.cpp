@@ -16,6 +16,8 @@
 namespace gapflow {
 namespace {
 
+constexpr double kRoundingShare = 1e-9;  // of a squared norm: below it, what is left is rounding
+
 // The partitions a size may differ over: each design column, and the observable where the fitted
 // points measure more than one. Each gives a level's label per point row. Design values are TOML
 // literals as the loader normalised them (number_text: 4.5 and 4.50 are one level).
@@ -35,8 +37,9 @@ std::vector<std::pair<std::string, std::vector<std::string>>> partitions(const D
 }
 
 // Each kept level's place on a straight trend, 0 at the lowest level and 1 at the highest: by the
-// level's value where every label is a number, by label order where two are not; empty where more
-// than two are not (no order to trend along) or all values are equal.
+// level's value where every label is a number; where two levels are not, either order (the F test
+// does not see the trend's sign); empty where more than two are not (no order to trend along) or
+// all values are equal.
 std::vector<double> trend_of(const std::vector<std::string>& labels) {
   std::vector<double> x;
   for (const std::string& label : labels) {
@@ -55,6 +58,16 @@ std::vector<double> trend_of(const std::vector<std::string>& labels) {
   const double low = *lo, width = *hi - *lo;
   for (double& v : x) v = (v - low) / width;
   return x;
+}
+
+// |P U c|^2: the noncentrality a trend c (0 at the lowest level, 1 at the highest) adds per unit
+// spread and key unit^2 of departure. NaN without an order; 0 where the fitted directions take the
+// trend in (what is left of it no more than rounding, as score_block judges a direction).
+double trend_noncentrality(const Eigen::MatrixXd& P, const Eigen::MatrixXd& U, const std::vector<double>& trend) {
+  if (trend.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::VectorXd shift = U * Eigen::Map<const Eigen::VectorXd>(trend.data(), U.cols());
+  const double left = (P * shift).squaredNorm();
+  return left > kRoundingShare * shift.squaredNorm() ? left : 0.0;
 }
 
 }  // namespace
@@ -100,16 +113,20 @@ FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   const Eigen::MatrixXd P = projector_out(Xc);
   const double rest = (P * r).squaredNorm() - b.statistic;
   c.scale = rest / c.rest_dof;
-  // No rest at all (to rounding) leaves the statistic unscaled: infinite F where there is one.
-  c.p = c.scale > 0 ? fisher_f_upper(c.statistic / (c.dof * c.scale), c.dof, c.rest_dof) : (c.statistic > 0 ? 0.0 : 1.0);
-  const std::vector<double> trend = trend_of(kept_labels);
-  c.trend_noncentrality = trend.empty() ? std::numeric_limits<double>::quiet_NaN()
-                                        : (P * U * Eigen::Map<const Eigen::VectorXd>(trend.data(), U.cols())).squaredNorm();
+  c.p = split_p(c.statistic, rest, c.dof, c.rest_dof, r.squaredNorm());
+  c.trend_noncentrality = trend_noncentrality(P, U, trend_of(kept_labels));
   return c;
 }
 
+double split_p(double statistic, double rest, int dof, int rest_dof, double residual_norm2) {
+  if (rest > 0) return fisher_f_upper(statistic / dof / (rest / rest_dof), dof, rest_dof);
+  // No rest at all (to rounding): the residual lies in the tested directions, an infinite F, unless
+  // the statistic is itself rounding (a residual of nothing).
+  return statistic > kRoundingShare * residual_norm2 && statistic > 0 ? 0.0 : 1.0;
+}
+
 double detectable_spread(const FormCheck& c, double departure, double alpha, double power) {
-  if (std::isnan(c.trend_noncentrality)) return c.trend_noncentrality;
+  if (std::isnan(c.trend_noncentrality)) return c.trend_noncentrality;  // no order to trend along
   const double per_unit = c.trend_noncentrality * departure * departure;  // lambda at spread 1
   if (!(per_unit > 0)) return std::numeric_limits<double>::infinity();
   return std::sqrt(min_detectable_noncentrality_f(c.dof, c.rest_dof, alpha, power) / per_unit);
@@ -141,7 +158,8 @@ std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface,
   for (std::size_t i = 0; i < checks.size(); ++i) {
     FormCheck& c = checks[i];
     c.p_adjusted = std::min(1.0, c.p * m);
-    c.detectable_spread = detectable_spread(c, departure[i], def.alpha / m, def.power);
+    c.spread_level = def.alpha / m;
+    c.detectable_spread = detectable_spread(c, departure[i], c.spread_level, def.power);
   }
   return checks;
 }

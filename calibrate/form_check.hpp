@@ -28,9 +28,10 @@
 // significant check says the effect's one size does not fit the design; it names no other effect.
 // A check that flags nothing says only as much as its power: each check states the smallest spread
 // of sizes across its column that it would flag with power 0.8 at the stated noise (a trend
-// straight in the level's value; exact by the noncentral F), so that a reader can set it against
-// what another form would need (a drag k v^2 read as linear needs a spread of about the spheres'
-// relative speed difference across the column).
+// straight in the level's value; exact by the noncentral F; where the residual's own scale is
+// below 1, the noise is smaller than stated and the spread smaller by sqrt(scale)), so that a
+// reader can set it against what another form would need (a drag k v^2 read as linear needs a
+// spread of about the spheres' relative speed difference across the column).
 #pragma once
 
 #include <Eigen/Dense>
@@ -61,14 +62,16 @@ struct FormCheck {
   double p = 1;          // P(F(dof, rest_dof) > statistic / (dof scale))
   double p_adjusted = 1; // p x the number of checks (Bonferroni), at most 1
   // What the check could see. A trend: the effect's departure from neutral straight in the level's
-  // value (in level order where a column has two levels that are not numbers), differing by a
-  // fraction `spread` of the fitted departure between the lowest and the highest level.
+  // value (either order where a column has two levels that are not numbers), the departure at the
+  // highest level exceeding the lowest's by a fraction `spread` of the fitted departure.
   double trend_noncentrality = 0;  // lambda of that trend per unit spread and per key unit^2 of departure
                                    // (|P U c|^2, whitened); NaN: levels with no order to trend along
+  double spread_level = 0;         // the level the spread is computed at (alpha / the number of checks)
   double detectable_spread = 0;    // the smallest spread the check flags with power `power` at the
-                                   // stated noise (1 = the departure doubles across the column);
-                                   // infinite where no spread can be seen (the fitted size at
-                                   // neutral, or the trend taken in by the fitted directions); NaN: no order
+                                   // stated noise (1: the departures at the two ends differ by the
+                                   // fitted departure); infinite where no spread can be seen (the
+                                   // fitted size at neutral, or the trend taken in by the fitted
+                                   // directions); NaN: no order
 };
 
 // One split (exposed for tests): r the whitened residual rows, X the fitted directions (its columns
@@ -77,6 +80,11 @@ struct FormCheck {
 // (fewer than two levels, a split the fitted directions mimic, or no residual left to scale by).
 FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u,
                       const std::vector<std::string>& level, int informative_rows, const FormCheckDef& def = {});
+
+// The split's p from its statistic S (dof) and the rest of the residual (rest_dof): Fisher's F on
+// S / dof over rest / rest_dof. A rest at or below zero (rounding) with S beyond rounding of the
+// residual's squared norm: p 0 (an infinite F); with S itself rounding: p 1.
+double split_p(double statistic, double rest, int dof, int rest_dof, double residual_norm2);
 
 // The smallest spread (FormCheck::detectable_spread) the check `c` flags with `power` at level
 // `alpha` (the check's share of the Bonferroni level), for a fitted departure from neutral of

@@ -30,12 +30,14 @@ def smallest_check(summary):
 
 
 def spread_text(check):
-    """A check's detectable spread as text: a percentage, 'none' (nothing can be seen: JSON null with
-    levels in order) or 'not reported' (a binary before 98daef1)."""
+    """A check's detectable spread as text: a percentage, 'none' (nothing can be seen), 'no order' (the
+    levels have none to trend along) or 'not reported' (a binary before 98daef1)."""
     if "detectable_spread" not in check:
         return "not reported"
+    if check.get("trend_ordered") is False:
+        return "no order"
     v = check["detectable_spread"]
-    return "none or no order" if v is None else f"{100 * v:.0f} %"
+    return "none" if v is None else f"{100 * v:.0f} %"
 
 
 def spreads(summary):

@@ -90,10 +90,13 @@ CASES = {
                       "form_differs": True,
                       "form_checks": [{"effect": "linear_drag", "column": "incline_deg", "levels": 3, "statistic": 14.0,
                                        "dof": 2, "rest_dof": 41, "scale": 1.25, "p": 0.005, "p_adjusted": 0.02,
-                                       "detectable_spread": 0.904},
+                                       "trend_ordered": True, "spread_level": 0.025, "detectable_spread": 0.904},
                                       {"effect": "linear_drag", "column": "W_over_d", "levels": 3, "statistic": 1.0,
                                        "dof": 2, "rest_dof": 41, "scale": 1.3, "p": 0.7, "p_adjusted": 1.0,
-                                       "detectable_spread": None}]}, ""),
+                                       "trend_ordered": True, "spread_level": 0.025, "detectable_spread": None},
+                                      {"effect": "linear_drag", "column": "observable", "levels": 4, "statistic": 1.0,
+                                       "dof": 3, "rest_dof": 40, "scale": 1.3, "p": 0.8, "p_adjusted": 1.0,
+                                       "trend_ordered": False, "spread_level": 0.025, "detectable_spread": None}]}, ""),
     # Invisible (power 0.1) and rightly "none".
     "rolling-low": (truth("rolling-low", [ROLL], power=0.1, chi2=1.0),
                     summary([], "consistent with noise", rms_before=1.0, rms_after=1.0), ""),
@@ -284,7 +287,7 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("| 0.02 (linear_drag split by incline_deg: S 14.0 on 2 dof; rest scale 1.25 on 41 dof) |", out)
         self.assertIn("| drag-low |", out)
         self.assertIn("no check", out)
-        self.assertIn("| incline_deg 90 %; W_over_d none or no order |", out)
+        self.assertIn("| incline_deg 90 %; W_over_d none; observable no order |", out)
         # rolling-high was found through drag's group: its flag is not a false alarm for a catalogue effect.
         self.assertIn("the planted effect tried, flagged (false alarms for a catalogue effect): 0 of 1 []", out)
         self.assertIn("other calibrations flagged: ['rolling-high']", out)
@@ -307,20 +310,38 @@ class BlindAnalysis(unittest.TestCase):
         needed = (math.sqrt(math.sin(math.radians(12))) - math.sqrt(math.sin(math.radians(5)))) / (
             sum(math.sqrt(math.sin(math.radians(t))) for t in (5, 8, 12)) / 3)
         checks = [{"effect": "linear_drag", "column": "incline_deg", "dof": 2, "rest_dof": 41, "p_adjusted": 0.9,
-                   "detectable_spread": needed},
+                   "scale": 1.0, "spread_level": 0.025, "detectable_spread": needed},
                   {"effect": "linear_drag", "column": "W_over_d", "dof": 2, "rest_dof": 41, "p_adjusted": 1.0,
-                   "detectable_spread": 2 * needed}]
+                   "scale": 1.0, "spread_level": 0.025, "detectable_spread": 2 * needed}]
         (case / "summary.json").write_text(json.dumps({"form_checks": checks}))
         code, out, err = run("quadratic_drag_visibility.py", root / "pass", root / "replay")
         self.assertEqual(code, 0, err)
-        self.assertIn(f"median {needed:.3f} (range {needed:.3f}-{needed:.3f}; sqrt(sin theta) predicts {needed:.3f})", out)
-        # At its own detectable spread the check has power 0.8, at level 0.05 / 2 checks.
-        self.assertIn(f"at level 0.025, F on 2 and 41 dof); adjusted p 0.9; power at the spread a quadratic drag asks for "
-                      f"({needed:.3f}): 0.80; power 0.8 there needs 1.0 x", out)
+        self.assertIn(f"median {needed:.3f} (range {needed:.3f}-{needed:.3f}; sqrt(sin theta) predicts {needed:.3f} "
+                      "against the mean", out)
+        # At its own detectable spread the check has power 0.8 at the stated noise and more where the
+        # residual's scale says the noise is smaller; against the steepest incline's size the spread is
+        # smaller (power lower), against the shallowest larger.
+        self.assertIn(f"at level 0.025 at the stated noise, F on 2 and 41 dof); adjusted p 0.9; power at the spread a "
+                      f"quadratic drag asks for ({needed:.3f}): 0.80 at the stated noise (0.", out)
+        self.assertIn("incline's size), 0.80 at the residual's own scale 1.00; power 0.8 there at the stated noise needs "
+                      "1.0 x", out)
+        low, high = (float(x) for x in out.split("at the stated noise (")[1].split(" against")[0].split(", "))
+        self.assertLess(low, 0.8)
+        self.assertGreater(high, 0.8)
         checks[0]["detectable_spread"] = 2 * needed  # half the spread seen: lambda / 4
+        checks[0]["scale"] = 0.25                    # the noise half the stated: lambda x 4
         (case / "summary.json").write_text(json.dumps({"form_checks": checks}))
-        self.assertIn("needs 4.0 x the information", run("quadratic_drag_visibility.py", root / "pass", root / "replay")[1])
+        out = run("quadratic_drag_visibility.py", root / "pass", root / "replay")[1]
+        self.assertIn("needs 4.0 x the information", out)
+        self.assertIn("0.80 at the residual's own scale 0.25", out)
+        checks[0]["detectable_spread"] = None
+        (case / "summary.json").write_text(json.dumps({"form_checks": checks}))
+        self.assertEqual(run("quadratic_drag_visibility.py", root / "pass", root / "replay")[0], 2)
         self.assertEqual(run("quadratic_drag_visibility.py", root / "replay", root / "replay")[0], 2)  # no null twin
+        # Two points at one gap and incline: refused, not silently overwritten.
+        twin = root / "pass" / "twins" / "null-1.toml"
+        twin.write_text(twin.read_text() + "\n" + points[0])
+        self.assertEqual(run("quadratic_drag_visibility.py", root / "pass", root / "replay")[0], 2)
 
     def test_interval_sides_says_toward_neutral(self):
         code, out, _ = run("interval_sides.py", self.pass_dir)

@@ -163,31 +163,42 @@ TEST(FormCheck, TheRestsDegreesOfFreedomAreTheInformativeRowsLessTheFittedAndTes
   EXPECT_EQ(check_split(projector_out(X) * r, X, u, incline_labels(), 4).dof, 0);
 }
 
+// The inclines by value, 5, 8 and 12 degrees: unevenly spaced, and not in string order.
+std::vector<std::string> incline_degree_labels() {
+  const char* degrees[] = {"5", "8", "12"};
+  std::vector<std::string> labels;
+  for (int i = 0; i < kPoints; ++i) labels.push_back(degrees[level(i)]);
+  return labels;
+}
+
 TEST(FormCheck, ASpreadAtTheDetectableSpreadIsFlaggedWithTheStatedPower) {
-  // The effect's departure 2 key units at the shallowest incline, growing straight with the
-  // incline's value by a fraction `spread` of it across the three levels; the fit takes one size
-  // and the offset, the check tests the split against the rest of the residual (rest dof 8). At
-  // the spread the check states it flags with power 0.8, 4000 draws reject at its level 80 % of
-  // the time (binomial sd 0.6 %): the noncentral F and the trend's noncentrality agree with what the
-  // check does.
+  // The effect's departure 2 key units at 5 degrees, growing straight with the incline by a
+  // fraction `spread` of it up to 12 degrees (3/7 of that at 8); the fit takes one size and the
+  // offset, the check tests the split against the rest of the residual (rest dof 8). At the spread
+  // the check states it flags with power 0.8, 4000 draws reject at its level 80 % of the time
+  // (binomial sd 0.6 %): the noncentral F and the trend's noncentrality (by the levels' values,
+  // not their order: 8 lies at 3/7) agree with what the check does.
   const double departure = 2, alpha = 0.05;
   const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
   const Eigen::VectorXd u = effect_sensitivity();
   RandomStream rng(17);
-  FormCheck design = check_split(P * unit_noise(rng), X, u, incline_labels(), kPoints);
+  FormCheck design = check_split(P * unit_noise(rng), X, u, incline_degree_labels(), kPoints);
   ASSERT_EQ(design.dof, 2);
   ASSERT_EQ(design.rest_dof, 8);
   const double spread = detectable_spread(design, departure, alpha, 0.8);
   ASSERT_TRUE(std::isfinite(spread));
-  const Eigen::Vector3d sizes = departure * Eigen::Vector3d(1, 1 + spread / 2, 1 + spread);
+  const Eigen::Vector3d sizes = departure * Eigen::Vector3d(1, 1 + spread * 3 / 7, 1 + spread);
   int flagged = 0;
   const int draws = 4000;
   for (int k = 0; k < draws; ++k)
-    flagged += check_split(P * (U * sizes + unit_noise(rng)), X, u, incline_labels(), kPoints).p < alpha;
+    flagged += check_split(P * (U * sizes + unit_noise(rng)), X, u, incline_degree_labels(), kPoints).p < alpha;
   EXPECT_NEAR(static_cast<double>(flagged) / draws, 0.8, 0.025) << "spread " << spread;
   // Twice the departure, half the spread; a check made at a stricter level needs more.
   EXPECT_NEAR(detectable_spread(design, 2 * departure, alpha, 0.8), spread / 2, 1e-6 * spread);
   EXPECT_GT(detectable_spread(design, departure, alpha / 10, 0.8), spread);
+  // The same levels by index (0, 1, 2) put 8 degrees at the middle: another trend, another spread.
+  const FormCheck by_index = check_split(P * unit_noise(rng), X, u, incline_labels(), kPoints);
+  EXPECT_GT(std::abs(detectable_spread(by_index, departure, alpha, 0.8) / spread - 1), 0.05);
 }
 
 TEST(FormCheck, ASpreadIsUnseenWhereTheSizeSitsAtNeutralOrTheLevelsHaveNoOrder) {
@@ -203,15 +214,37 @@ TEST(FormCheck, ASpreadIsUnseenWhereTheSizeSitsAtNeutralOrTheLevelsHaveNoOrder) 
   EXPECT_TRUE(std::isnan(detectable_spread(unordered, 1.0, 0.05, 0.8)));
 }
 
+TEST(FormCheck, ATrendTheFittedDirectionsTakeInCannotBeSeen) {
+  // A fitted direction that is the effect's trend across the inclines (0, 1/2, 1 of it at the three
+  // levels): what is left of the trend is rounding, so no spread is detectable, not a huge one.
+  Eigen::MatrixXd X = fitted_directions();
+  const Eigen::VectorXd u = effect_sensitivity();
+  Eigen::VectorXd trend(kPoints);
+  for (int i = 0; i < kPoints; ++i) trend(i) = 0.5 * level(i) * u(i);
+  X.conservativeResize(Eigen::NoChange, 3);
+  X.col(2) = trend;
+  RandomStream rng(29);
+  const FormCheck c = check_split(projector_out(X) * unit_noise(rng), X, u, incline_labels(), kPoints);
+  ASSERT_EQ(c.dof, 1);
+  EXPECT_EQ(c.trend_noncentrality, 0.0);
+  EXPECT_TRUE(std::isinf(detectable_spread(c, 1.0, 0.05, 0.8)));
+}
+
 TEST(FormCheck, AResidualWhollyInTheSplitIsAMismatchNotNoise) {
-  // No noise at all: the residual is the split's own (sizes 1, 3, 6), the rest zero to rounding
-  // (here about 1e-15 above it; where rounding leaves it at or below zero, check_split reads the F
-  // as infinite rather than giving p = 1, a branch this case does not reach).
+  // No noise at all: the residual is the split's own (sizes 1, 3, 6), the rest zero to rounding.
   const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
   const FormCheck c = check_split(P * U * Eigen::Vector3d(1, 3, 6), X, effect_sensitivity(), incline_labels(), kPoints);
   ASSERT_EQ(c.dof, 2);
   EXPECT_GT(c.statistic, 1);
   EXPECT_LT(c.p, 1e-6) << "scale " << c.scale;
+}
+
+TEST(FormCheck, WithNoRestTheSplitIsAMismatchUnlessItIsItselfRounding) {
+  EXPECT_NEAR(split_p(9.0, 8.0, 2, 8, 17.0), fisher_f_upper(4.5, 2, 8), 1e-12);
+  EXPECT_EQ(split_p(9.0, 0.0, 2, 8, 9.0), 0.0);     // the residual all in the split: an infinite F
+  EXPECT_EQ(split_p(9.0, -1e-15, 2, 8, 9.0), 0.0);  // the rest below zero by rounding: the same
+  EXPECT_EQ(split_p(1e-30, -1e-31, 2, 8, 1.0), 1.0);  // a statistic of rounding: nothing
+  EXPECT_EQ(split_p(0.0, 0.0, 2, 8, 0.0), 1.0);     // no residual at all
 }
 
 TEST(FormCheck, AnyAdjustedPBelowAlphaFlagsTheForm) {
