@@ -5,7 +5,8 @@
 # pass 19's) refuses the other before writing anything (exit 2), that a
 # resume makes and calibrates nothing again, that the summary says which draw the pass fits, and
 # that studies/score_lean_replay.sh replays with the other setting of --independent-signatures, and
-# that studies/blind_pass_copy.sh copies a finished pass (and only a finished one) without its stores.
+# that studies/blind_pass_copy.sh copies a finished pass (and only a finished one) without its stores,
+# and that studies/blind_pass_carry.sh carries a cut-off pass to another machine to be resumed there.
 #   tests/blind_study_script_test.sh
 set -euo pipefail
 src=$(cd "$(dirname "$0")/.." && pwd)
@@ -181,4 +182,33 @@ set -e
 [[ $rc_again == 2 ]] || fail "copied over a pass: exit $rc_again"
 [[ $rc_unfinished == 2 && ! -e $work/results/unfinished ]] || fail "an unfinished pass was copied: exit $rc_unfinished"
 grep -q "null-3 has no summary.json" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
+# A pass cut off by its machine's end, carried through the repository by studies/blind_pass_carry.sh
+# and resumed on another: only what had finished is carried (no store, no calibration still running),
+# the resumed pass makes only what was missing, and a carried file is never overwritten.
+blind "$work/whole" 1 16000 $design || fail "a whole pass: $(cat "$work/stderr")"
+touch "$work/whole/runs.sqlite"
+cp -r "$work/whole" "$work/cut"
+rm -r "$work/cut/null-3" "$work/cut/null-4.time" "$work/cut/twins/null-4.toml" "$work/cut/truth/null-4.json"
+carry() { "$src/studies/blind_pass_carry.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
+carry save "$work/cut" "$work/carry" || fail "saving a cut-off pass: $(cat "$work/stderr")"
+[[ -z $(find "$work/carry" -name '*.sqlite*') ]] || fail "a store was carried"
+[[ -f $work/carry/twins/null-3.toml && ! -e $work/carry/null-3 && ! -e $work/carry/null-4 ]] ||
+  fail "the carry holds a calibration that had not finished, or lacks a twin that had"
+carry save "$work/cut" "$work/carry" && grep -q "^saved 0 new files" "$work/stdout" || fail "a second save copied again"
+[[ $(wc -l < "$work/carry/saves.txt") == 2 ]] || fail "saves.txt does not log each save"
+carry restore "$work/carry" "$work/resumed" || fail "restoring: $(cat "$work/stderr")"
+: > "$work/log"
+blind "$work/resumed" 1 16000 $design || fail "resuming a carried pass: $(cat "$work/stderr")"
+[[ $(grep -c '^twin ' "$work/log") == 1 && $(grep -c '^calibrate ' "$work/log") == 2 ]] ||
+  fail "the resumed pass did not make exactly the missing twin and calibrations: $(cat "$work/log")"
+cmp -s "$work/resumed/null-2/summary.json" "$work/whole/null-2/summary.json" || fail "a carried calibration changed"
+echo "changed" > "$work/cut/twins/null-2.toml"
+set +e
+carry save "$work/cut" "$work/carry"; rc_differs=$?
+grep -q "null-2.toml exists and differs" "$work/stderr"; said_differs=$?
+carry save "$work/nothing" "$work/carry"; rc_missing=$?
+set -e
+[[ $rc_differs == 2 && $said_differs == 0 ]] || fail "a differing file: exit $rc_differs, $(cat "$work/stderr")"
+cmp -s "$work/carry/twins/null-2.toml" "$work/whole/twins/null-2.toml" || fail "a carried file was overwritten"
+[[ $rc_missing == 2 ]] || fail "saving from a missing folder: exit $rc_missing"
 echo "ok"
