@@ -10,9 +10,9 @@
 #   studies/blind_pass_carry.sh save PASS CARRY      copy what PASS has finished into CARRY
 #   studies/blind_pass_carry.sh restore CARRY PASS   put CARRY back into PASS, then run the pass's command again
 #
-# save copies only finished calibrations (a folder with summary.json whose .time exists, which
-# /usr/bin/time writes when the calibration has ended; anything else is cut off or still running,
-# and would be begun again anyway) and never removes or changes a file already there: a file
+# save copies only finished calibrations (a folder with summary.json and a .time that is not empty:
+# /usr/bin/time creates it empty at the start and writes it when the calibration has ended; anything
+# else is cut off or still running, and would be begun again anyway) and never removes or changes a file already there: a file
 # that differs is an error (exit 2), since a pass's files are written once. restore works the same
 # way in the other direction. Both say how many files they copied and print nothing of the files'
 # contents: a running pass is not read.
@@ -47,7 +47,7 @@ carried_files() {
      id=$(basename "$twin" .toml)
      echo "$twin"
      [[ -f truth/$id.json ]] && echo "truth/$id.json"
-     if [[ -f $id/summary.json && -f $id.time ]]; then  # .time: written when the calibration has ended
+     if [[ -f $id/summary.json && -s $id.time ]]; then  # .time: opened at the start, written at the end
        find "$id" -type f ! -name '*.sqlite*' | sort
        [[ -f $id.time ]] && echo "$id.time"
      fi

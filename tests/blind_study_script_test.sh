@@ -188,18 +188,24 @@ grep -q "null-3 has no summary.json" "$work/stderr" || fail "no clear error: $(c
 blind "$work/whole" 1 16000 $design || fail "a whole pass: $(cat "$work/stderr")"
 touch "$work/whole/runs.sqlite"
 cp -r "$work/whole" "$work/cut"
-rm -r "$work/cut/null-3" "$work/cut/null-4.time" "$work/cut/twins/null-4.toml" "$work/cut/truth/null-4.json"
+# null-1: cut off before its summary; null-3: its summary written, its calibration not yet ended
+# (/usr/bin/time creates the .time empty at the start and writes it at the end); null-4: no twin yet.
+rm "$work/cut/null-1/summary.json"
+: > "$work/cut/null-1.time"
+: > "$work/cut/null-3.time"
+rm -r "$work/cut/null-4" "$work/cut/null-4.time" "$work/cut/twins/null-4.toml" "$work/cut/truth/null-4.json"
 carry() { "$src/studies/blind_pass_carry.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
 carry save "$work/cut" "$work/carry" || fail "saving a cut-off pass: $(cat "$work/stderr")"
 [[ -z $(find "$work/carry" -name '*.sqlite*') ]] || fail "a store was carried"
-[[ -f $work/carry/twins/null-3.toml && ! -e $work/carry/null-3 && ! -e $work/carry/null-4 ]] ||
+[[ -f $work/carry/twins/null-1.toml && -f $work/carry/twins/null-3.toml && ! -e $work/carry/null-1 && ! -e $work/carry/null-3 &&
+   ! -e $work/carry/null-3.time && ! -e $work/carry/twins/null-4.toml ]] ||
   fail "the carry holds a calibration that had not finished, or lacks a twin that had"
 carry save "$work/cut" "$work/carry" && grep -q "^saved 0 new files" "$work/stdout" || fail "a second save copied again"
 [[ $(wc -l < "$work/carry/saves.txt") == 2 ]] || fail "saves.txt does not log each save"
 carry restore "$work/carry" "$work/resumed" || fail "restoring: $(cat "$work/stderr")"
 : > "$work/log"
 blind "$work/resumed" 1 16000 $design || fail "resuming a carried pass: $(cat "$work/stderr")"
-[[ $(grep -c '^twin ' "$work/log") == 1 && $(grep -c '^calibrate ' "$work/log") == 2 ]] ||
+[[ $(grep -c '^twin ' "$work/log") == 1 && $(grep -c '^calibrate ' "$work/log") == 3 ]] ||
   fail "the resumed pass did not make exactly the missing twin and calibrations: $(cat "$work/log")"
 cmp -s "$work/resumed/null-2/summary.json" "$work/whole/null-2/summary.json" || fail "a carried calibration changed"
 echo "changed" > "$work/cut/twins/null-2.toml"
