@@ -3,7 +3,8 @@
 # 28 calibrations takes 4.5-7 h on 2 cores; a session's machine lasts less, and nothing outside the
 # repository survives it. What studies/calibration_blind.sh needs to resume is small: its records
 # (seed_offset, design, calibrate_options, model_seeds, twin_replicates), the twins and their
-# truths, and each finished calibration (its folder and .time). Its run stores (*.sqlite*) are not
+# truths, and each finished calibration (its folder and .time). Replays of the pass run as far as it
+# has got (studies/calibration_replay.sh PASS DIR: PASS/DIR/) are carried the same way. Its run stores (*.sqlite*) are not
 # needed: with MODEL_SEEDS=per-twin no run is shared between calibrations, and a calibration that
 # was cut off is begun again from scratch (deterministic, so to the same result).
 #
@@ -37,21 +38,42 @@ copy_once() {
   cp -p "$1" "$2"
 }
 
-# The files of FOLDER that make a resumable pass, one path per line relative to FOLDER.
+# finished_calibrations FOLDER TWINS: the ids of TWINS/*.toml whose calibration in FOLDER has
+# finished: its summary.json written and its .time not empty (/usr/bin/time creates it at the start
+# and writes it at the end).
+finished_calibrations() {
+  for twin in "$2"/twins/*.toml; do
+    [[ -f $twin ]] || continue
+    id=$(basename "$twin" .toml)
+    [[ -f $1/$id/summary.json && -s $1/$id.time ]] && echo "$id"
+  done
+  return 0
+}
+
+# The files of FOLDER that make a resumable pass, one path per line relative to FOLDER: its records,
+# twins, truths and finished calibrations, and of each replay in it (studies/calibration_replay.sh,
+# a folder with replay.made_by) the same but its summary over the cases (remade when it ends).
 carried_files() {
-  local folder=$1
-  (cd "$folder"
+  (cd "$1"
    for record in "${records[@]}"; do [[ -f $record ]] && echo "$record"; done
-   for twin in twins/*.toml; do
-     [[ -f $twin ]] || continue
-     id=$(basename "$twin" .toml)
-     echo "$twin"
-     [[ -f truth/$id.json ]] && echo "truth/$id.json"
-     if [[ -f $id/summary.json && -s $id.time ]]; then  # .time: opened at the start, written at the end
-       find "$id" -type f ! -name '*.sqlite*' | sort
-       [[ -f $id.time ]] && echo "$id.time"
-     fi
-   done)
+   find twins truth -maxdepth 1 -type f \( -name '*.toml' -o -name '*.json' \) 2>/dev/null | sort
+   for id in $(finished_calibrations . .); do
+     find "$id" -type f ! -name '*.sqlite*' | sort
+     echo "$id.time"
+   done
+   for made_by in */replay.made_by; do
+     [[ -f $made_by ]] || continue
+     replay=$(dirname "$made_by")
+     echo "$made_by"
+     for record in "${records[@]}"; do [[ -f $replay/$record ]] && echo "$replay/$record"; done
+     find "$replay/truth" -maxdepth 1 -type f -name '*.json' 2>/dev/null | sort
+     for id in $(finished_calibrations "$replay" .); do
+       find "$replay/$id" -type f ! -name '*.sqlite*' | sort
+       echo "$replay/$id.time"
+       [[ -f $replay/$id.log ]] && echo "$replay/$id.log"
+     done
+   done
+   return 0)
 }
 
 copy_all() {  # FROM TO: copies carried_files(FROM); prints how many were new

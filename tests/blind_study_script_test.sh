@@ -194,9 +194,22 @@ rm "$work/cut/null-1/summary.json"
 : > "$work/cut/null-1.time"
 : > "$work/cut/null-3.time"
 rm -r "$work/cut/null-4" "$work/cut/null-4.time" "$work/cut/twins/null-4.toml" "$work/cut/truth/null-4.json"
+# studies/calibration_replay.sh replays what the cut-off pass has finished, and only that.
+replay() { "$src/studies/calibration_replay.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
+: > "$work/log"
+/usr/bin/python3 -c 'import sqlite3, sys; s = sqlite3.connect(sys.argv[1]); s.execute("pragma journal_mode=wal")
+s.execute("create table runs (key text)"); s.execute("insert into runs values (?)", ("kept",)); s.commit()' "$work/cut/runs.sqlite"
+replay "$work/cut" replay-x 1 || fail "replaying a cut-off pass: $(cat "$work/stderr")"
+[[ $(/usr/bin/python3 -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1]).execute("select key from runs").fetchone()[0])' \
+     "$work/cut/replay-x/runs.sqlite") == kept ]] || fail "the replay's copy of the store lacks the pass's runs"
+[[ $(grep -c '^calibrate ' "$work/log") == $((cases - 3)) ]] && ! grep -q "null-[134]" "$work/log" ||
+  fail "the replay of a cut-off pass calibrated other twins than the finished ones: $(cat "$work/log")"
+grep -q "2 twin(s) left for a later run" "$work/stderr" || fail "the replay does not say what it left: $(cat "$work/stderr")"
 carry() { "$src/studies/blind_pass_carry.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
 carry save "$work/cut" "$work/carry" || fail "saving a cut-off pass: $(cat "$work/stderr")"
 [[ -z $(find "$work/carry" -name '*.sqlite*') ]] || fail "a store was carried"
+[[ -f $work/carry/replay-x/replay.made_by && -f $work/carry/replay-x/null-2/summary.json && -s $work/carry/replay-x/null-2.time &&
+   ! -e $work/carry/replay-x/report.md ]] || fail "the replay was not carried, or its partial summary was"
 [[ -f $work/carry/twins/null-1.toml && -f $work/carry/twins/null-3.toml && ! -e $work/carry/null-1 && ! -e $work/carry/null-3 &&
    ! -e $work/carry/null-3.time && ! -e $work/carry/twins/null-4.toml ]] ||
   fail "the carry holds a calibration that had not finished, or lacks a twin that had"
@@ -208,6 +221,12 @@ blind "$work/resumed" 1 16000 $design || fail "resuming a carried pass: $(cat "$
 [[ $(grep -c '^twin ' "$work/log") == 1 && $(grep -c '^calibrate ' "$work/log") == 3 ]] ||
   fail "the resumed pass did not make exactly the missing twin and calibrations: $(cat "$work/log")"
 cmp -s "$work/resumed/null-2/summary.json" "$work/whole/null-2/summary.json" || fail "a carried calibration changed"
+# The carried replay goes on where it stopped, on the new machine's store.
+touch "$work/resumed/runs.sqlite"
+: > "$work/log"
+replay "$work/resumed" replay-x 1 || fail "continuing a carried replay: $(cat "$work/stderr")"
+[[ $(grep -c '^calibrate ' "$work/log") == 3 && -f $work/resumed/replay-x/truth/null-4.json ]] ||
+  fail "the carried replay did not calibrate exactly the three twins it had left: $(cat "$work/log")"
 echo "changed" > "$work/cut/twins/null-2.toml"
 set +e
 carry save "$work/cut" "$work/carry"; rc_differs=$?
