@@ -236,4 +236,18 @@ set -e
 [[ $rc_differs == 2 && $said_differs == 0 ]] || fail "a differing file: exit $rc_differs, $(cat "$work/stderr")"
 cmp -s "$work/carry/twins/null-2.toml" "$work/whole/twins/null-2.toml" || fail "a carried file was overwritten"
 [[ $rc_missing == 2 ]] || fail "saving from a missing folder: exit $rc_missing"
+# studies/blind_pass_session.sh: one machine's share, the carry put back, the launch recorded, all
+# that finished saved; a second machine's share then has nothing to make.
+session() { "$src/studies/blind_pass_session.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
+: > "$work/log"
+session "$work/carry2" "$work/sess" env GAPFLOW="$work/gapflow" "$src/studies/calibration_blind.sh" "$work/sess" 1 16000 $design ||
+  fail "a session: $(cat "$work/stderr")"
+[[ $(find "$work/carry2" -name summary.json | wc -l) == "$cases" ]] || fail "the session did not save every calibration"
+grep -q "launch 1 at .*, binary $work/gapflow, sha256 [0-9a-f]\{16\}$" "$work/carry2/launches.txt" &&
+  grep -q "launch 1: the pass's command ended with exit 0" "$work/carry2/launches.txt" || fail "launch not recorded: $(cat "$work/carry2/launches.txt")"
+: > "$work/log"
+session "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow" "$src/studies/calibration_blind.sh" "$work/sess2" 1 16000 $design ||
+  fail "a second session: $(cat "$work/stderr")"
+[[ ! -s $work/log ]] || fail "the second session made again what the first had carried: $(head -1 "$work/log")"
+grep -q "launch 2 at " "$work/carry2/launches.txt" || fail "the second launch is not numbered 2"
 echo "ok"
