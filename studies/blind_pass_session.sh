@@ -4,14 +4,17 @@
 # command, and saves what it has finished into CARRY every SAVE_EVERY seconds and when it ends.
 # Commit CARRY before the machine ends; nothing of the pass is read or printed here.
 #
-#   [SAVE_EVERY=300] studies/blind_pass_session.sh CARRY PASS COMMAND...
+#   [SAVE_EVERY=300] [ALLOW_OTHER_BINARY=1] studies/blind_pass_session.sh CARRY PASS COMMAND...
 #
 # e.g. (pass 22; run in the background, from the repository's root)
 #   studies/blind_pass_session.sh results/calibration-blind-pass22/carry /work/pass22 \
 #     env MODEL_SEEDS=per-twin TWIN_REPLICATES=20 GAPFLOW=/work/bin-p21/gapflow \
-#     /usr/bin/time -v -o /work/pass22.timevN studies/calibration_blind.sh /work/pass22 2 18000 data/blind/design_v2.toml
-# The launch's line names the commit and the sha256 of $GAPFLOW as the command sets it (the first
-# GAPFLOW=... word of COMMAND), so a launch on another binary shows.
+#     /usr/bin/time -v -o '/work/pass22.timev{launch}' studies/calibration_blind.sh /work/pass22 2 18000 data/blind/design_v2.toml
+# {launch} in COMMAND's words becomes the launch's number. The launch's line names the commit and
+# the sha256 of the binary the command names (its first GAPFLOW=... word); a binary whose sha256
+# differs from the last launch's is refused (exit 2) unless ALLOW_OTHER_BINARY=1, so that one pass
+# is not made by two binaries unnoticed. A save that fails is logged in CARRY/saves.txt, which is
+# committed, since the pass's own log cannot be read while it runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ $# -ge 3 ]] || { echo "usage: [SAVE_EVERY=300] studies/blind_pass_session.sh CARRY PASS COMMAND..." >&2; exit 2; }
@@ -20,28 +23,45 @@ save_every=${SAVE_EVERY:-300}
 [[ $save_every =~ ^[0-9]+$ ]] && ((save_every >= 10)) ||
   { echo "error: SAVE_EVERY is '$save_every'; allowed: a whole number of seconds, at least 10" >&2; exit 2; }
 
+sha=""
 binary="(no GAPFLOW= in the command)"
 for word in "$@"; do
   if [[ $word == GAPFLOW=* ]]; then
     gapflow=${word#GAPFLOW=}
     [[ -x $gapflow ]] || { echo "error: GAPFLOW=$gapflow is not an executable" >&2; exit 2; }
-    binary="$gapflow, sha256 $(sha256sum "$gapflow" | cut -c1-16)"
+    sha=$(sha256sum "$gapflow" | cut -c1-16)
+    binary="$gapflow, sha256 $sha"
     break
   fi
 done
+last_sha=$( (grep ' launch [0-9]* at ' "$carry/launches.txt" 2> /dev/null || true) | tail -1 |
+  sed -n 's/.*sha256 \([0-9a-f]\{16\}\).*/\1/p')
+if [[ -n $last_sha && $sha != "$last_sha" && ${ALLOW_OTHER_BINARY:-0} != 1 ]]; then
+  echo "error: the last launch in $carry/launches.txt ran a binary of sha256 $last_sha, this one ${sha:-unknown};" \
+    "set ALLOW_OTHER_BINARY=1 to run it anyway (the launch's line records it)" >&2
+  exit 2
+fi
 
 if [[ -d $carry ]]; then studies/blind_pass_carry.sh restore "$carry" "$pass"; fi
 mkdir -p "$carry"
 launches=$(grep -c ' launch [0-9]* at ' "$carry/launches.txt" 2> /dev/null || true)
 launch=$(( ${launches:-0} + 1 ))
 echo "$(date -u +%FT%TZ) launch $launch at $(git rev-parse --short HEAD), binary $binary" >> "$carry/launches.txt"
+command=("${@//\{launch\}/$launch}")
 
-save() { if [[ -d $pass/twins ]]; then studies/blind_pass_carry.sh save "$pass" "$carry" || true; fi; }
+save() {
+  [[ -d $pass/twins ]] || return 0
+  local status=0
+  studies/blind_pass_carry.sh save "$pass" "$carry" || status=$?
+  if ((status != 0)); then echo "$(date -u +%FT%TZ) save failed (exit $status)" >> "$carry/saves.txt"; fi
+}
 (while sleep "$save_every"; do save; done) &
 saver=$!
 trap 'kill "$saver" 2> /dev/null || true' EXIT
 status=0
-"$@" || status=$?
+"${command[@]}" || status=$?
+kill "$saver" 2> /dev/null || true
+wait "$saver" 2> /dev/null || true
 save
 echo "$(date -u +%FT%TZ) launch $launch: the pass's command ended with exit $status" >> "$carry/launches.txt"
 exit "$status"

@@ -17,8 +17,10 @@
 # pass has not finished (no summary.json, or its .time still empty) is left for a later run. The store
 # is copied anew at every start, with SQLite's backup (consistent while the pass writes to it), so a
 # DIR carried to another machine without its store (studies/blind_pass_carry.sh) is continued there on
-# the store of the pass's part run on that machine: with a model seed per twin no run is shared
-# between calibrations, so that store holds every run its calibrations made.
+# the store of the pass's part run on that machine. With a model seed per twin no run is shared
+# between calibrations, so that store holds every run of the calibrations that machine ran; replay
+# only those (stop the pass, then replay, then save): a calibration carried from another machine and
+# replayed here would have its runs simulated again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ $# -ge 2 ]] || { echo "usage: studies/calibration_replay.sh PASS DIR [JOBS] [CALIBRATE OPTIONS...]" >&2; exit 2; }
@@ -30,11 +32,24 @@ gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 [[ -f $pass/runs.sqlite && -d $pass/twins && -d $pass/truth ]] ||
   { echo "error: $pass is not a blind pass with a store (runs.sqlite, twins/, truth/ expected)" >&2; exit 2; }
 made_by="$(sha256sum "$gapflow" | cut -c1-16) $*"
+# ended_well FOLDER ID: the calibration ID in FOLDER (the pass or DIR) has ended well: summary.json
+# written, its .time not empty (/usr/bin/time creates it at the start and writes it at the end) and
+# not saying the command failed.
+ended_well() {
+  [[ -f $1/$2/summary.json ]] || return 1
+  [[ -f $1/$2.time ]] || return 0   # a pass copied without its time records
+  [[ -s $1/$2.time ]] && ! grep -q '^Command ' "$1/$2.time"
+}
 copy_store() {  # SQLite's online backup: a consistent copy even while the pass writes to its store
+  rm -f "$dir"/runs.sqlite.partial "$dir"/runs.sqlite.partial-wal "$dir"/runs.sqlite.partial-shm
   /usr/bin/python3 -c 'import sqlite3, sys
-source, copy = sqlite3.connect(sys.argv[1]), sqlite3.connect(sys.argv[2])
+source = sqlite3.connect("file:" + sys.argv[1] + "?mode=ro", uri=True)
+copy = sqlite3.connect(sys.argv[2])
 source.backup(copy)
-copy.close()' "$pass/runs.sqlite" "$dir/runs.sqlite.partial"
+copy.close()
+source.close()' "$pass/runs.sqlite" "$dir/runs.sqlite.partial"
+  # A replay killed earlier may have left its store's log behind; SQLite would apply it to the copy.
+  rm -f "$dir"/runs.sqlite-wal "$dir"/runs.sqlite-shm
   mv "$dir/runs.sqlite.partial" "$dir/runs.sqlite"
 }
 if [[ -d $dir ]]; then
@@ -48,26 +63,30 @@ else
   done
   echo "$made_by" > "$dir/replay.made_by"
 fi
-# A new copy at every start: it holds every run the pass has made so far, also those of calibrations
-# that finished since the last start (the replay's own runs of a calibration it had not finished are
-# simulated again, to the same values).
+exec 9> "$dir/runs.sqlite.replay-lock"   # *.sqlite*: neither copied nor carried
+flock -n 9 || { echo "error: another replay is running in $dir" >&2; exit 2; }
+# Which calibrations the pass has finished is decided before the store is copied: a calibration's
+# runs are all in the store before its .time is written, so the copy holds them. The copy is made
+# anew at every start, so that it holds every run the pass has made so far (the replay's own runs of
+# a calibration it had not finished are simulated again, to the same values).
+to_replay=() unfinished=0
+for twin in "$pass"/twins/*.toml; do
+  [[ -f $twin ]] || continue
+  id=$(basename "$twin" .toml)
+  ended_well "$dir" "$id" && continue
+  if ended_well "$pass" "$id"; then to_replay+=("$id"); else unfinished=$((unfinished + 1)); fi
+done
 copy_store
 for truth in "$pass"/truth/*.json; do   # twins made since DIR was (a pass replayed as far as it has got)
-  [[ -e $dir/truth/$(basename "$truth") ]] || cp "$truth" "$dir/truth/"
+  [[ -f $truth && ! -e $dir/truth/$(basename "$truth") ]] || continue
+  cp "$truth" "$dir/truth/.partial" && mv "$dir/truth/.partial" "$dir/truth/$(basename "$truth")"
 done
-unfinished=0
-for twin in "$pass"/twins/*.toml; do
-  id=$(basename "$twin" .toml)
-  [[ -f $dir/$id/summary.json ]] && continue   # finished (as studies/calibration_blind.sh judges it)
-  # Not finished in the pass yet: /usr/bin/time creates the .time at the start and writes it at the end.
-  if [[ ! -f $pass/$id/summary.json || ( -f $pass/$id.time && ! -s $pass/$id.time ) ]]; then
-    unfinished=$((unfinished + 1)); continue
-  fi
-  /usr/bin/time -v -o "$dir/$id.time" "$gapflow" calibrate "$twin" --model 2d --out "$dir/$id" \
+for id in "${to_replay[@]}"; do
+  /usr/bin/time -v -o "$dir/$id.time" "$gapflow" calibrate "$pass/twins/$id.toml" --model 2d --out "$dir/$id" \
     --db "$dir/runs.sqlite" --jobs "$jobs" --no-plots "$@" > "$dir/$id.log" 2>&1 ||
     { echo "error: the calibration of $id failed; see $dir/$id.log" >&2; exit 1; }
 done
 if ((unfinished > 0)); then
-  echo "replayed what $pass has finished; $unfinished twin(s) left for a later run (no summary yet)" >&2
+  echo "replayed what $pass has finished; $unfinished twin(s) left for a later run (not finished there yet)" >&2
 fi
 /usr/bin/python3 calibrate/blind_summary.py "$dir" > /dev/null

@@ -250,4 +250,43 @@ session "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow" "$src/studies/c
   fail "a second session: $(cat "$work/stderr")"
 [[ ! -s $work/log ]] || fail "the second session made again what the first had carried: $(head -1 "$work/log")"
 grep -q "launch 2 at " "$work/carry2/launches.txt" || fail "the second launch is not numbered 2"
+# {launch} in the command is the launch's number; another binary than the last launch's is refused.
+session "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow" touch "$work/timev{launch}" &&
+  [[ -f $work/timev3 ]] || fail "{launch} not replaced by 3: $(ls "$work")"
+cp "$work/gapflow" "$work/gapflow-other" && echo "# other" >> "$work/gapflow-other"
+set +e
+session "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow-other" true; rc_other=$?
+set -e
+[[ $rc_other == 2 ]] && grep -q "ALLOW_OTHER_BINARY=1" "$work/stderr" && ! grep -q "launch 4 at " "$work/carry2/launches.txt" ||
+  fail "another binary was not refused: exit $rc_other, $(cat "$work/stderr")"
+ALLOW_OTHER_BINARY=1 session "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow-other" true &&
+  grep -q "launch 4 at .*gapflow-other" "$work/carry2/launches.txt" || fail "ALLOW_OTHER_BINARY=1 refused"
+
+# What must not be carried: a twin whose truth is not written yet, a calibration whose .time says
+# it failed. A copy that fails is an error, not a file counted as there.
+mkdir -p "$work/odd/twins" "$work/odd/truth" "$work/odd/null-2"
+cp "$work/whole/twins/null-1.toml" "$work/odd/twins/"
+cp "$work/whole/twins/null-2.toml" "$work/odd/twins/" && cp "$work/whole/truth/null-2.json" "$work/odd/truth/"
+cp "$work/whole/null-2/summary.json" "$work/odd/null-2/"
+printf 'Command exited with non-zero status 1\n3.00 s wall\n' > "$work/odd/null-2.time"
+carry save "$work/odd" "$work/carry-odd" || fail "saving the odd pass: $(cat "$work/stderr")"
+[[ ! -e $work/carry-odd/twins/null-1.toml && -f $work/carry-odd/twins/null-2.toml && ! -e $work/carry-odd/null-2 ]] ||
+  fail "a twin without its truth, or a failed calibration, was carried"
+mkdir -p "$work/blocked" && : > "$work/blocked/twins"   # a file where the twins' folder goes: even root cannot copy
+set +e
+carry save "$work/whole" "$work/blocked"; rc_copy=$?
+set -e
+[[ $rc_copy == 2 ]] && grep -q "could not copy" "$work/stderr" || fail "a failed copy was not an error: exit $rc_copy, $(cat "$work/stderr")"
+
+# A replay killed earlier left its store's log behind: the new copy of the pass's store is what the
+# replay reads, not the old copy with the old log applied.
+/usr/bin/python3 -c 'import os, sqlite3, sys
+s = sqlite3.connect(sys.argv[1]); s.execute("pragma journal_mode=wal"); s.execute("create table runs (key text)")
+s.execute("insert into runs values (?)", ("stale",)); s.commit(); os._exit(0)' "$work/stale.sqlite"
+[[ -s $work/stale.sqlite-wal ]] || fail "the test could not leave a log behind"
+cp "$work/stale.sqlite" "$work/cut/replay-x/runs.sqlite" && cp "$work/stale.sqlite-wal" "$work/cut/replay-x/runs.sqlite-wal"
+rm -r "$work/cut/replay-x/null-2"
+replay "$work/cut" replay-x 1 || fail "replaying again: $(cat "$work/stderr")"
+[[ $(/usr/bin/python3 -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1]).execute("select key from runs").fetchone()[0])' \
+     "$work/cut/replay-x/runs.sqlite") == kept ]] || fail "the replay's store copy read the stale log"
 echo "ok"
