@@ -2,7 +2,9 @@
 # One machine's share of a blind pass that outlives its machine (studies/blind_pass_carry.sh says
 # why): puts the carry back into PASS, records the launch in CARRY/launches.txt, runs the pass's own
 # command, and saves what it has finished into CARRY every SAVE_EVERY seconds and when it ends.
-# Commit CARRY before the machine ends; nothing of the pass is read or printed here.
+# Stop it before the machine ends with SIGTERM (pkill -f blind_pass_session.sh): it stops the pass,
+# saves, and records the stop; then replay what the pass finished (studies/calibration_replay.sh),
+# save again and commit CARRY. Nothing of the pass is read or printed here.
 #
 #   [SAVE_EVERY=300] [ALLOW_OTHER_BINARY=1] studies/blind_pass_session.sh CARRY PASS COMMAND...
 #
@@ -58,10 +60,21 @@ save() {
 (while sleep "$save_every"; do save; done) &
 saver=$!
 trap 'kill "$saver" 2> /dev/null || true' EXIT
+# The command in a process group of its own, so that a stop (SIGTERM or SIGINT to this script)
+# reaches all of it (time, the pass's script, gapflow) and this script can still save and record.
+setsid "${command[@]}" &
+pass_pid=$!
+stopped=0
+trap 'stopped=1; kill -TERM -- "-$pass_pid" 2> /dev/null || true' TERM INT
 status=0
-"${command[@]}" || status=$?
+wait "$pass_pid" || status=$?
+while kill -0 "$pass_pid" 2> /dev/null; do status=0; wait "$pass_pid" || status=$?; done
 kill "$saver" 2> /dev/null || true
 wait "$saver" 2> /dev/null || true
 save
-echo "$(date -u +%FT%TZ) launch $launch: the pass's command ended with exit $status" >> "$carry/launches.txt"
+if ((stopped)); then
+  echo "$(date -u +%FT%TZ) launch $launch: stopped by a signal (the pass's command ended with exit $status)" >> "$carry/launches.txt"
+else
+  echo "$(date -u +%FT%TZ) launch $launch: the pass's command ended with exit $status" >> "$carry/launches.txt"
+fi
 exit "$status"

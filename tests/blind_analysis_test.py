@@ -19,6 +19,7 @@ import unittest
 from pathlib import Path
 
 CALIBRATE = Path(__file__).resolve().parent.parent / "calibrate"
+STUDIES = Path(__file__).resolve().parent.parent / "studies"
 
 
 def truth(case, planted, power=None, chi2=None):
@@ -395,6 +396,44 @@ class BlindAnalysis(unittest.TestCase):
         self.assertEqual(run("visibility_ceiling.py", empty)[0], 2)
         self.assertEqual(run("decisive_rounds.py", "1e-4", empty)[0], 2)
         self.assertEqual(run("oracle_scale.py", empty)[0], 2)
+
+
+
+class CarriedWallTime(unittest.TestCase):
+    """studies/blind_pass_wall_time.py on a carry's logs: a launch lost with its machine, one whose
+    end is known only by its last save, one stopped, one ended."""
+
+    def test_each_launch_and_the_total(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            carry = Path(tmp)
+            (carry / "launches.txt").write_text(
+                "2026-11-28T10:00:00Z launch 1 at abc, binary b, sha256 0123456789abcdef\n"
+                "2026-11-28T11:00:00Z launch 2 at abc, binary b, sha256 0123456789abcdef\n"
+                "2026-11-28T13:00:00Z launch 3 at abd, binary b, sha256 0123456789abcdef\n"
+                "2026-11-28T13:30:00Z launch 3: stopped by a signal (the pass's command ended with exit 143)\n"
+                "2026-11-28T14:00:00Z launch 4 at abd, binary b, sha256 0123456789abcdef\n"
+                "2026-11-28T14:10:30Z launch 4: the pass's command ended with exit 0\n")
+            (carry / "saves.txt").write_text(
+                "2026-11-28T11:05:00Z 1 twins, 0 finished calibrations\n"
+                "2026-11-28T12:20:00Z 9 twins, 8 finished calibrations\n"
+                "2026-11-28T13:29:00Z 12 twins, 11 finished calibrations\n"
+                "2026-11-28T13:40:00Z save failed (exit 2)\n")
+            done = subprocess.run([sys.executable, str(STUDIES / "blind_pass_wall_time.py"), str(carry)],
+                                  capture_output=True, text=True)
+            self.assertEqual(done.returncode, 0, done.stderr)
+            lines = done.stdout.splitlines()
+            self.assertIn("launch 1: from 2026-11-28 10:00:00 UTC, lost with its machine", lines[0])
+            self.assertIn("launch 2: from 2026-11-28 11:00:00 to 12:20:00 UTC, 1 h 20 min, at least", lines[1])
+            self.assertIn("launch 3: from 2026-11-28 13:00:00 to 13:30:00 UTC, 0 h 30 min, stopped", lines[2])
+            self.assertIn("launch 4: from 2026-11-28 14:00:00 to 14:10:30 UTC, 0 h 10 min, ended", lines[3])
+            self.assertIn("wall time over the launches: at least 2 h 00 min; 1 launch(es) lost", lines[4])
+
+    def test_a_folder_without_launches_is_exit_2(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            done = subprocess.run([sys.executable, str(STUDIES / "blind_pass_wall_time.py"), tmp],
+                                  capture_output=True, text=True)
+            self.assertEqual(done.returncode, 2)
+            self.assertIn("no launches.txt", done.stderr)
 
 
 if __name__ == "__main__":

@@ -262,6 +262,18 @@ set -e
 ALLOW_OTHER_BINARY=1 session "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow-other" true &&
   grep -q "launch 4 at .*gapflow-other" "$work/carry2/launches.txt" || fail "ALLOW_OTHER_BINARY=1 refused"
 
+# A stop (SIGTERM to the session) reaches the whole command, is saved and recorded.
+"$src/studies/blind_pass_session.sh" "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow-other" \
+  bash -c "sleep 2; touch '$work/not-stopped'" > /dev/null 2>&1 &
+session_pid=$!
+sleep 0.5
+kill -TERM "$session_pid"
+set +e; wait "$session_pid"; rc_stop=$?; set -e
+sleep 2.5
+[[ ! -e $work/not-stopped ]] || fail "the stop did not reach the session's command"
+grep -q "launch 5: stopped by a signal" "$work/carry2/launches.txt" || fail "the stop not recorded: $(tail -2 "$work/carry2/launches.txt")"
+[[ $rc_stop != 0 ]] || fail "a stopped session exited 0"
+
 # What must not be carried: a twin whose truth is not written yet, a calibration whose .time says
 # it failed. A copy that fails is an error, not a file counted as there.
 mkdir -p "$work/odd/twins" "$work/odd/truth" "$work/odd/null-2"
