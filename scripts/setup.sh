@@ -1,8 +1,16 @@
 #!/usr/bin/env bash
 # Install what is missing (Debian 12 packages only) and build gapflow (Release) into build/.
 # Safe to run again: it installs nothing that is already there and rebuilds incrementally.
+#   bash scripts/setup.sh [--packages-only]   (--packages-only: install, build nothing; e.g. to build
+#                                              another commit's binary first, as a carried pass does)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+packages_only=false
+case ${1:-} in
+  "") ;;
+  --packages-only) packages_only=true ;;
+  *) echo "error: unknown option '$1'; allowed: --packages-only" >&2; exit 2 ;;
+esac
 
 packages=(
   build-essential cmake pkg-config
@@ -28,5 +36,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
+$packages_only && exit 0
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)"
