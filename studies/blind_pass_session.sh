@@ -2,9 +2,10 @@
 # One machine's share of a blind pass that outlives its machine (studies/blind_pass_carry.sh says
 # why): puts the carry back into PASS, records the launch in CARRY/launches.txt, runs the pass's own
 # command, and saves what it has finished into CARRY every SAVE_EVERY seconds and when it ends.
-# Stop it before the machine ends with SIGTERM (pkill -f blind_pass_session.sh): it stops the pass,
-# saves, and records the stop; then replay what the pass finished (studies/calibration_replay.sh),
-# save again and commit CARRY. Nothing of the pass is read or printed here.
+# Stop it before the machine ends with SIGTERM (kill -TERM "$(cat PASS.session-pid)"): it stops the
+# pass's whole command, waits for it, saves, records the stop, and removes PASS.session-pid. Then
+# replay what the pass finished (studies/calibration_replay.sh), save again and commit CARRY.
+# Nothing of the pass is read or printed here.
 #
 #   [SAVE_EVERY=300] [ALLOW_OTHER_BINARY=1] studies/blind_pass_session.sh CARRY PASS COMMAND...
 #
@@ -21,6 +22,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ $# -ge 3 ]] || { echo "usage: [SAVE_EVERY=300] studies/blind_pass_session.sh CARRY PASS COMMAND..." >&2; exit 2; }
 carry=${1%/}; pass=${2%/}; shift 2
+# A stop before the command runs ends the session at the next step; once it runs, it stops the
+# command's whole process group.
+stopped=0 pass_pid=""
+trap 'stopped=1; if [[ -n $pass_pid ]]; then kill -TERM -- "-$pass_pid" 2> /dev/null || true; fi' TERM INT
 save_every=${SAVE_EVERY:-300}
 [[ $save_every =~ ^[0-9]+$ ]] && ((save_every >= 10)) ||
   { echo "error: SAVE_EVERY is '$save_every'; allowed: a whole number of seconds, at least 10" >&2; exit 2; }
@@ -57,24 +62,35 @@ save() {
   studies/blind_pass_carry.sh save "$pass" "$carry" || status=$?
   if ((status != 0)); then echo "$(date -u +%FT%TZ) save failed (exit $status)" >> "$carry/saves.txt"; fi
 }
-(while sleep "$save_every"; do save; done) &
+# The saver sleeps in a child it kills when stopped, so that no sleep outlives it.
+(trap 'kill "$nap" 2> /dev/null; exit 0' TERM
+ while sleep "$save_every" & nap=$!; wait "$nap"; do save; done) &
 saver=$!
 trap 'kill "$saver" 2> /dev/null || true' EXIT
+echo "$$" > "$pass.session-pid"   # beside PASS, not in it: `kill -TERM $(cat PASS.session-pid)` stops this
+record_end() {  # HOW: the launch's end line
+  echo "$(date -u +%FT%TZ) launch $launch: $1" >> "$carry/launches.txt"
+}
+if ((stopped)); then record_end "stopped by a signal before its command ran"; exit 143; fi
 # The command in a process group of its own, so that a stop (SIGTERM or SIGINT to this script)
 # reaches all of it (time, the pass's script, gapflow) and this script can still save and record.
 setsid "${command[@]}" &
 pass_pid=$!
-stopped=0
-trap 'stopped=1; kill -TERM -- "-$pass_pid" 2> /dev/null || true' TERM INT
+if ((stopped)); then kill -TERM -- "-$pass_pid" 2> /dev/null || true; fi   # a stop in between
 status=0
 wait "$pass_pid" || status=$?
-while kill -0 "$pass_pid" 2> /dev/null; do status=0; wait "$pass_pid" || status=$?; done
+while kill -0 "$pass_pid" 2> /dev/null; do wait "$pass_pid" || true; done
+status=0; wait "$pass_pid" || status=$?   # the command's own status, also when a stop came as it ended
+# gapflow cancels at the end of a step: wait for the whole group (2 min, then KILL) before saving.
+for _ in $(seq 120); do kill -0 -- "-$pass_pid" 2> /dev/null || break; sleep 1; done
+kill -KILL -- "-$pass_pid" 2> /dev/null || true
 kill "$saver" 2> /dev/null || true
 wait "$saver" 2> /dev/null || true
 save
 if ((stopped)); then
-  echo "$(date -u +%FT%TZ) launch $launch: stopped by a signal (the pass's command ended with exit $status)" >> "$carry/launches.txt"
+  record_end "stopped by a signal (the pass's command ended with exit $status)"
 else
-  echo "$(date -u +%FT%TZ) launch $launch: the pass's command ended with exit $status" >> "$carry/launches.txt"
+  record_end "the pass's command ended with exit $status"
 fi
+rm -f "$pass.session-pid"
 exit "$status"

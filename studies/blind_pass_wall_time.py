@@ -4,8 +4,9 @@
 A pass's `/usr/bin/time -v` record is lost with a machine that ends while the pass runs, so its
 wall time is read from the carry's logs instead: launches.txt (each launch's start, and its end
 where studies/blind_pass_session.sh recorded one: "ended" or "stopped by a signal") and saves.txt
-(when each save was made). A launch without a recorded end ran at least until its last save before
-the next launch; one with neither was lost with its machine (its time unknown, nothing of it kept).
+(when each save was made). A launch without a recorded end ran until about its last save before the
+next launch (at least until then, if no save was made by hand after the pass had stopped); one with
+neither was lost with its machine (its time unknown, nothing of it kept). Minutes are rounded down.
 
     /usr/bin/python3 studies/blind_pass_wall_time.py CARRY
 
@@ -28,7 +29,7 @@ def when(stamp):
 
 
 def hours_minutes(seconds):
-    minutes = round(seconds / 60)
+    minutes = int(seconds // 60)
     return f"{minutes // 60} h {minutes % 60:02d} min"
 
 
@@ -76,9 +77,10 @@ def main(argv):
         known += seconds
         bound |= how == "last save"
         what = {"stopped": "stopped", "ended": "ended",
-                "last save": "at least (its last save; its end not recorded)"}[how]
+                "last save": "until its last save (its end not recorded)"}[how]
         print(f"launch {n}: from {start:%Y-%m-%d %H:%M:%S} to {end:%H:%M:%S} UTC, {hours_minutes(seconds)}, {what}")
-    print(f"wall time over the launches: {'at least ' if bound else ''}{hours_minutes(known)}"
+    print(f"wall time over the launches: {hours_minutes(known)}"
+          + (" (a launch's end read from its last save)" if bound else "")
           + (f"; {lost} launch(es) lost with their machines, their time unknown and nothing of them kept" if lost else ""))
     return 0
 

@@ -407,26 +407,32 @@ class CarriedWallTime(unittest.TestCase):
         with tempfile.TemporaryDirectory() as tmp:
             carry = Path(tmp)
             (carry / "launches.txt").write_text(
-                "2026-11-28T10:00:00Z launch 1 at abc, binary b, sha256 0123456789abcdef\n"
-                "2026-11-28T11:00:00Z launch 2 at abc, binary b, sha256 0123456789abcdef\n"
+                "2026-11-28T10:00:00Z launch 1 at 1fbb39b, binary /work/bin-p21/gapflow (a build of d1c04b1, sha256 "
+                "a5f046a09623aea5); lost with its machine at the session's end: nothing of it was kept\n"
+                "2026-11-28T11:00:00Z launch 2 at 0b2bb3c, binary sha256 31a0d9c685b8258e\n"
                 "2026-11-28T13:00:00Z launch 3 at abd, binary b, sha256 0123456789abcdef\n"
                 "2026-11-28T13:30:00Z launch 3: stopped by a signal (the pass's command ended with exit 143)\n"
                 "2026-11-28T14:00:00Z launch 4 at abd, binary b, sha256 0123456789abcdef\n"
-                "2026-11-28T14:10:30Z launch 4: the pass's command ended with exit 0\n")
+                "2026-11-28T14:10:30Z launch 4: the pass's command ended with exit 0\n"
+                "2026-11-28T15:00:00Z launch 5 at abd, binary b, sha256 0123456789abcdef\n")
             (carry / "saves.txt").write_text(
                 "2026-11-28T11:05:00Z 1 twins, 0 finished calibrations\n"
                 "2026-11-28T12:20:00Z 9 twins, 8 finished calibrations\n"
                 "2026-11-28T13:29:00Z 12 twins, 11 finished calibrations\n"
-                "2026-11-28T13:40:00Z save failed (exit 2)\n")
+                "2026-11-28T13:40:00Z save failed (exit 2)\n"
+                "2026-11-28T15:45:59Z 20 twins, 19 finished calibrations\n")
             done = subprocess.run([sys.executable, str(STUDIES / "blind_pass_wall_time.py"), str(carry)],
                                   capture_output=True, text=True)
             self.assertEqual(done.returncode, 0, done.stderr)
             lines = done.stdout.splitlines()
             self.assertIn("launch 1: from 2026-11-28 10:00:00 UTC, lost with its machine", lines[0])
-            self.assertIn("launch 2: from 2026-11-28 11:00:00 to 12:20:00 UTC, 1 h 20 min, at least", lines[1])
+            self.assertIn("launch 2: from 2026-11-28 11:00:00 to 12:20:00 UTC, 1 h 20 min, until its last save", lines[1])
             self.assertIn("launch 3: from 2026-11-28 13:00:00 to 13:30:00 UTC, 0 h 30 min, stopped", lines[2])
             self.assertIn("launch 4: from 2026-11-28 14:00:00 to 14:10:30 UTC, 0 h 10 min, ended", lines[3])
-            self.assertIn("wall time over the launches: at least 2 h 00 min; 1 launch(es) lost", lines[4])
+            self.assertIn("launch 5: from 2026-11-28 15:00:00 to 15:45:59 UTC, 0 h 45 min, until its last save", lines[4])
+            # 80 + 30 + 10.5 + 45.98 min = 166.5 min (rounded down once, in the total)
+            self.assertIn("wall time over the launches: 2 h 46 min (a launch's end read from its last save); "
+                          "1 launch(es) lost", lines[5])
 
     def test_a_folder_without_launches_is_exit_2(self):
         with tempfile.TemporaryDirectory() as tmp:

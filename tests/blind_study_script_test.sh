@@ -262,17 +262,19 @@ set -e
 ALLOW_OTHER_BINARY=1 session "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow-other" true &&
   grep -q "launch 4 at .*gapflow-other" "$work/carry2/launches.txt" || fail "ALLOW_OTHER_BINARY=1 refused"
 
-# A stop (SIGTERM to the session) reaches the whole command, is saved and recorded.
+# A stop (SIGTERM to the pid the session writes beside PASS) reaches the whole command, the
+# command's own children too, and is saved and recorded.
 "$src/studies/blind_pass_session.sh" "$work/carry2" "$work/sess2" env GAPFLOW="$work/gapflow-other" \
-  bash -c "sleep 2; touch '$work/not-stopped'" > /dev/null 2>&1 &
+  bash -c "touch '$work/started'; (sleep 3; touch '$work/not-stopped') & wait" > /dev/null 2>&1 &
 session_pid=$!
-sleep 0.5
-kill -TERM "$session_pid"
+for _ in $(seq 100); do [[ -e $work/started && -s $work/sess2.session-pid ]] && break; sleep 0.2; done
+[[ $(cat "$work/sess2.session-pid") == "$session_pid" ]] || fail "the session's pid file does not name it"
+kill -TERM "$(cat "$work/sess2.session-pid")"
 set +e; wait "$session_pid"; rc_stop=$?; set -e
-sleep 2.5
-[[ ! -e $work/not-stopped ]] || fail "the stop did not reach the session's command"
+sleep 3.5
+[[ ! -e $work/not-stopped ]] || fail "the stop did not reach the command's children"
 grep -q "launch 5: stopped by a signal" "$work/carry2/launches.txt" || fail "the stop not recorded: $(tail -2 "$work/carry2/launches.txt")"
-[[ $rc_stop != 0 ]] || fail "a stopped session exited 0"
+[[ $rc_stop != 0 && ! -e $work/sess2.session-pid ]] || fail "a stopped session exited 0 or left its pid file"
 
 # What must not be carried: a twin whose truth is not written yet, a calibration whose .time says
 # it failed. A copy that fails is an error, not a file counted as there.
