@@ -1,5 +1,6 @@
 # The blind study's cases, shared by studies/calibration_blind.sh (which makes and calibrates them)
-# and studies/blind_resignal.sh (which makes them again). Sourced, not run.
+# and studies/blind_resignal.sh (which makes them again), and when a case's calibration has ended
+# (calibration_ended_well, for calibration_replay.sh and blind_pass_carry.sh). Sourced, not run.
 
 # id  model  seed  planted (effect:NAME:SIZE | set:KEY=VALUE), space-separated
 # outside-quadratic-16 was added for pass 20: on design v2 the quadratic drags of 2 and 4 /m were
@@ -61,4 +62,15 @@ planted_options() {
 model_seed_options() {
   seed_options=()
   if [[ $1 == per-twin ]]; then seed_options=(--model-seed $(($2 * 1000))); fi
+}
+# calibration_ended_well FOLDER ID: the calibration ID in FOLDER (a pass, or a replay's folder) has
+# ended well: its summary.json written and its .time (studies/calibration_blind.sh's and
+# calibration_replay.sh's /usr/bin/time record) not empty and not saying the command failed. time
+# creates the file empty at the start and writes it at the end, and gapflow writes summary.json
+# before its other outputs, so summary.json alone does not say a calibration has ended. A folder
+# without the .time (a pass copied without its time records) is judged by summary.json.
+calibration_ended_well() {
+  [[ -f $1/$2/summary.json ]] || return 1
+  [[ -f $1/$2.time ]] || return 0
+  [[ -s $1/$2.time ]] && ! grep -q '^Command ' "$1/$2.time"
 }

@@ -12,10 +12,10 @@
 #   studies/blind_pass_carry.sh save PASS CARRY      copy what PASS has finished into CARRY
 #   studies/blind_pass_carry.sh restore CARRY PASS   put CARRY back into PASS, then run the pass's command again
 #
-# save copies only finished calibrations (a folder with summary.json and a .time that is not empty
-# and does not say the command failed: /usr/bin/time creates it empty at the start and writes it
-# when the calibration has ended; anything else is cut off or still running, and would be begun
-# again anyway), and a twin only with its truth. It never removes or changes a file already there: a
+# save copies only finished calibrations (calibration_ended_well of studies/blind_cases.sh: a
+# folder with summary.json and a .time that is not empty and does not say the command failed;
+# /usr/bin/time creates it empty at the start and writes it when the calibration has ended;
+# anything else is cut off or still running, and would be begun again anyway), and a twin only with its truth. It never removes or changes a file already there: a
 # file that differs is left as it was, the rest is copied, and the save ends in an error (exit 2),
 # since a pass's files are written once. Each file is copied through a temporary name, and one save
 # or restore runs at a time on a pass (flock). restore works the same way in the other direction.
@@ -31,6 +31,7 @@ verb=$1; from=${2%/}; to=${3%/}
 [[ -d $from ]] || { echo "error: no folder $from" >&2; exit 2; }
 
 records=(seed_offset design calibrate_options model_seeds twin_replicates)
+source studies/blind_cases.sh   # calibration_ended_well
 
 # copy_once SRC DST: copies SRC to DST (through a temporary name, so that DST is whole or absent)
 # unless DST holds the same bytes. Returns 0 when copied, 1 when already there, 3 when DST differs
@@ -43,13 +44,6 @@ copy_once() {
   fi
   { mkdir -p "$(dirname "$2")" && cp -p "$1" "$2.carry-partial" && mv "$2.carry-partial" "$2"; } ||
     { echo "error: could not copy $1 to $2" >&2; exit 2; }
-}
-
-# finished FOLDER ID: the calibration ID in FOLDER has ended well: its summary.json is written and
-# its .time is not empty (/usr/bin/time creates it at the start and writes it at the end) and does
-# not say the command failed (GNU time's "Command exited with non-zero status" or "... terminated").
-finished() {
-  [[ -f $1/$2/summary.json && -s $1/$2.time ]] && ! grep -q '^Command ' "$1/$2.time"
 }
 
 # twins_with_truth FOLDER: the ids of FOLDER/twins/*.toml whose truth is written (gapflow twin
@@ -75,7 +69,7 @@ carried_files() {
      echo "twins/$id.toml"
    done
    for id in $(twins_with_truth .); do
-     finished . "$id" || continue
+     calibration_ended_well . "$id" || continue
      find "$id" -type f ! -name '*.sqlite*' ! -name '*.carry-partial' | sort
      echo "$id.time"
    done
@@ -86,7 +80,7 @@ carried_files() {
      for record in "${records[@]}"; do [[ -f $replay/$record ]] && echo "$replay/$record"; done
      for id in $(twins_with_truth .); do
        [[ -f $replay/truth/$id.json ]] && echo "$replay/truth/$id.json"
-       finished "$replay" "$id" || continue
+       calibration_ended_well "$replay" "$id" || continue
        find "$replay/$id" -type f ! -name '*.sqlite*' ! -name '*.carry-partial' | sort
        echo "$replay/$id.time"
        [[ -f $replay/$id.log ]] && echo "$replay/$id.log"
@@ -114,7 +108,7 @@ count() {  # FOLDER: "T twins, C finished calibrations"
   local twins=0 done=0 id
   for id in $(twins_with_truth "$1"); do
     twins=$((twins + 1))
-    if finished "$1" "$id"; then done=$((done + 1)); fi
+    if calibration_ended_well "$1" "$id"; then done=$((done + 1)); fi
   done
   echo "$twins twins, $done finished calibrations"
 }

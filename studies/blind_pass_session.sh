@@ -66,7 +66,7 @@ save() {
 (trap 'kill "$nap" 2> /dev/null; exit 0' TERM
  while sleep "$save_every" & nap=$!; wait "$nap"; do save; done) &
 saver=$!
-trap 'kill "$saver" 2> /dev/null || true' EXIT
+trap 'kill "$saver" 2> /dev/null || true; rm -f "$pass.session-pid"' EXIT
 echo "$$" > "$pass.session-pid"   # beside PASS, not in it: `kill -TERM $(cat PASS.session-pid)` stops this
 record_end() {  # HOW: the launch's end line
   echo "$(date -u +%FT%TZ) launch $launch: $1" >> "$carry/launches.txt"
@@ -77,10 +77,9 @@ if ((stopped)); then record_end "stopped by a signal before its command ran"; ex
 setsid "${command[@]}" &
 pass_pid=$!
 if ((stopped)); then kill -TERM -- "-$pass_pid" 2> /dev/null || true; fi   # a stop in between
-status=0
-wait "$pass_pid" || status=$?
+# wait returns early when a stop's trap runs: wait until the command has ended, then take its own status
 while kill -0 "$pass_pid" 2> /dev/null; do wait "$pass_pid" || true; done
-status=0; wait "$pass_pid" || status=$?   # the command's own status, also when a stop came as it ended
+status=0; wait "$pass_pid" || status=$?
 # gapflow cancels at the end of a step: wait for the whole group (2 min, then KILL) before saving.
 for _ in $(seq 120); do kill -0 -- "-$pass_pid" 2> /dev/null || break; sleep 1; done
 kill -KILL -- "-$pass_pid" 2> /dev/null || true
@@ -92,5 +91,4 @@ if ((stopped)); then
 else
   record_end "the pass's command ended with exit $status"
 fi
-rm -f "$pass.session-pid"
 exit "$status"

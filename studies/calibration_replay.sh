@@ -32,14 +32,7 @@ gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 [[ -f $pass/runs.sqlite && -d $pass/twins && -d $pass/truth ]] ||
   { echo "error: $pass is not a blind pass with a store (runs.sqlite, twins/, truth/ expected)" >&2; exit 2; }
 made_by="$(sha256sum "$gapflow" | cut -c1-16) $*"
-# ended_well FOLDER ID: the calibration ID in FOLDER (the pass or DIR) has ended well: summary.json
-# written, its .time not empty (/usr/bin/time creates it at the start and writes it at the end) and
-# not saying the command failed.
-ended_well() {
-  [[ -f $1/$2/summary.json ]] || return 1
-  [[ -f $1/$2.time ]] || return 0   # a pass copied without its time records
-  [[ -s $1/$2.time ]] && ! grep -q '^Command ' "$1/$2.time"
-}
+source studies/blind_cases.sh   # calibration_ended_well
 copy_store() {  # SQLite's online backup: a consistent copy even while the pass writes to its store
   rm -f "$dir"/runs.sqlite.partial "$dir"/runs.sqlite.partial-wal "$dir"/runs.sqlite.partial-shm
   /usr/bin/python3 -c 'import sqlite3, sys
@@ -73,8 +66,8 @@ to_replay=() unfinished=0
 for twin in "$pass"/twins/*.toml; do
   [[ -f $twin ]] || continue
   id=$(basename "$twin" .toml)
-  ended_well "$dir" "$id" && continue
-  if ended_well "$pass" "$id"; then to_replay+=("$id"); else unfinished=$((unfinished + 1)); fi
+  calibration_ended_well "$dir" "$id" && continue
+  if calibration_ended_well "$pass" "$id"; then to_replay+=("$id"); else unfinished=$((unfinished + 1)); fi
 done
 copy_store
 for truth in "$pass"/truth/*.json; do   # twins made since DIR was (a pass replayed as far as it has got)
