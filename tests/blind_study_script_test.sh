@@ -303,4 +303,28 @@ rm -r "$work/cut/replay-x/null-2"
 replay "$work/cut" replay-x 1 || fail "replaying again: $(cat "$work/stderr")"
 [[ $(/usr/bin/python3 -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1]).execute("select key from runs").fetchone()[0])' \
      "$work/cut/replay-x/runs.sqlite") == kept ]] || fail "the replay's store copy read the stale log"
+# studies/form_check_power.sh: DRAWS null and quadratic-drag twins on their seeds (draw 1 the blind
+# study's null-1 and outside-quadratic-16 at the offset), each its own model seed; a resume makes
+# nothing again; another setting is refused before anything is written.
+power() { "$src/studies/form_check_power.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
+: > "$work/log"
+DRAWS=2 power "$work/power" 1 19000 $design || fail "form_check_power.sh: $(cat "$work/stderr")"
+[[ $(grep -c '^twin ' "$work/log") == 4 && $(grep -c '^calibrate ' "$work/log") == 4 ]] || fail "not 4 twins and 4 calibrations"
+grep -q -- "--seed 19101 .*--name null-1 .*--model-seed 19101000$" "$work/log" || fail "null-1 not on its seeds"
+grep -q -- "--seed 19143 .*--name quadratic-16-1 .*--set particles.quadratic_drag_per_m=16 --model-seed 19143000$" "$work/log" ||
+  fail "quadratic-16-1 not the blind study's outside-quadratic-16 at the offset: $(grep quadratic-16-1 "$work/log")"
+grep -q -- "--seed 19144 .*--name quadratic-16-2 .*--model-seed 19144000$" "$work/log" || fail "quadratic-16-2 not on its seeds"
+if grep -q -- "--name null-.*--set" "$work/log"; then fail "a null twin was planted with something"; fi
+[[ -s $work/power/form_checks.txt && -s $work/power/quadratic_drag_visibility-2.txt ]] || fail "no form-check table or visibility"
+: > "$work/log"
+DRAWS=2 power "$work/power" 1 19000 $design || fail "form_check_power.sh resumed: $(cat "$work/stderr")"
+[[ ! -s $work/log ]] || fail "a resume ran gapflow: $(head -1 "$work/log")"
+set +e
+DRAWS=3 power "$work/power" 1 19000 $design; rc_draws=$?
+TWIN_REPLICATES=20 DRAWS=2 power "$work/power" 1 19000 $design; rc_runs=$?
+set -e
+[[ $rc_draws == 2 && $rc_runs == 2 ]] || fail "other settings not refused: exits $rc_draws $rc_runs"
+grep -q "made with other settings" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
+[[ ! -s $work/log && $(grep -c '^draws 2$' "$work/power/settings") == 1 ]] || fail "a refused run ran gapflow or changed the record"
+
 echo "ok"
