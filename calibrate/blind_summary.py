@@ -173,6 +173,9 @@ def main(out):
     # The design the twins were made from (the script records it from pass 10 on; before, the first one).
     design_file = out / "design"
     design = design_file.read_text().strip() if design_file.exists() else "data/blind/design.toml"
+    # The script that made the folder (studies/form_check_power.sh records itself; the pass script does not).
+    made_by_file = out / "made_by"
+    made_by = made_by_file.read_text().strip() if made_by_file.exists() else "studies/calibration_blind.sh"
     # Whose draw of the model's noise the calibrations fit (recorded from pass 20 on; before, the design's).
     seeds_file = out / "model_seeds"
     model_seeds = seeds_file.read_text().strip() if seeds_file.exists() else "design"
@@ -276,7 +279,7 @@ def main(out):
     lines = [
         "# Calibration loop: blind study",
         "",
-        f"Made by `studies/calibration_blind.sh` (twins of `{design}`, each calibrated blind with the 2D model; "
+        f"Made by `{made_by}` (twins of `{design}`, each calibrated blind with the 2D model; "
         f"{seeds_text}; this page by `/usr/bin/python3 calibrate/blind_summary.py {out}`). Truth per twin in `truth/`, "
         "each calibration's report data in `<case>/`, one row per twin in `cases.csv`.",
         "",

@@ -39,6 +39,7 @@ from scipy.stats import f as fisher_f
 from scipy.stats import ncf
 
 INCLINE = "incline_deg"
+LINEAR_DRAG = "linear_drag"
 
 
 def incline_spreads(pass_dir):
@@ -101,9 +102,12 @@ def main(argv):
     print(f"median {needed:.3f} (range {min(values):.3f}-{max(values):.3f}; sqrt(sin theta) predicts "
           f"{mean_ref:.3f} against the mean, {high_ref:.3f} against the steepest, {low_ref:.3f} against the shallowest)")
     summary = json.loads(Path(replay, case, "summary.json").read_text())
-    along = [c for c in summary.get("form_checks", []) if c["column"] == INCLINE]
+    # Only a linear drag's check asks this question: another effect's size need not follow the speed.
+    along = [c for c in summary.get("form_checks", []) if c["column"] == INCLINE and c["effect"] == LINEAR_DRAG]
     if not along or any(c.get("detectable_spread") is None or "spread_level" not in c for c in along):
-        print(f"error: {case} in {replay} has no check along {INCLINE} with a detectable spread", file=sys.stderr)
+        added = ", ".join(e["effect"] for e in summary.get("effects", [])) or "nothing"
+        print(f"error: {case} in {replay} has no check of {LINEAR_DRAG} along {INCLINE} with a detectable spread "
+              f"(added: {added}; verdict: {summary.get('verdict', '?')})", file=sys.stderr)
         sys.exit(2)
     for c in along:
         ratio = (c["detectable_spread"] / needed) ** 2

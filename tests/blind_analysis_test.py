@@ -335,6 +335,14 @@ class BlindAnalysis(unittest.TestCase):
         out = run("quadratic_drag_visibility.py", root / "pass", root / "replay")[1]
         self.assertIn("needs 4.0 x the information", out)
         self.assertIn("0.80 at the residual's own scale 0.25", out)
+        # Read as another effect: its check along the incline asks nothing of a drag's law, and is not taken.
+        other = [dict(checks[0], effect="restitution", detectable_spread=needed)]
+        (case / "summary.json").write_text(json.dumps({"form_checks": other, "verdict": "effect found",
+                                                       "effects": [{"effect": "restitution"}]}))
+        code, _, err = run("quadratic_drag_visibility.py", root / "pass", root / "replay")
+        self.assertEqual(code, 2)
+        self.assertIn("no check of linear_drag along incline_deg with a detectable spread (added: restitution; "
+                      "verdict: effect found)", err)
         checks[0]["detectable_spread"] = None
         (case / "summary.json").write_text(json.dumps({"form_checks": checks}))
         self.assertEqual(run("quadratic_drag_visibility.py", root / "pass", root / "replay")[0], 2)

@@ -41,6 +41,11 @@ while [[ $# -gt 0 ]]; do
 done
 if [[ $command == twin ]]; then
   printf '[model]\nscenario = "x.toml"\nseed = %s\n' "$model_seed" > "$out"
+  # STUB_POINTS: J_mid at three inclines (as sqrt(sin theta): spread 0.900 over 3-20 deg), for the null
+  # twins that quadratic_drag_visibility.py reads.
+  [[ -n ${STUB_POINTS:-} ]] && printf '[observable]\nkind = "j_mid"\n%s' \
+    "$(for t in 3 8 20; do printf '[[point]]\nW_over_d = 4.5\nincline_deg = %s\nshape = "none"\nvalue = %s\n' \
+       $t "$(awk -v t=$t 'BEGIN { print 100 * sqrt(sin(t * 3.14159265358979 / 180)) }')"; done)" >> "$out"
   # The new stand-in's truth records the data's runs per point, as gapflow twin's does; the old one's not.
   runs_field=""
   [[ ${STUB_BINARY:-new} == new ]] && runs_field=", \"replicates\": $replicates"
@@ -48,9 +53,11 @@ if [[ $command == twin ]]; then
 else
   mkdir -p "$out"
   : > "$out/report.md"
+  checks=""  # STUB_POINTS: a linear drag's check along the incline that sees a spread of 0.9
+  [[ -n ${STUB_POINTS:-} ]] && checks='"form_checks": [{"effect": "linear_drag", "column": "incline_deg", "statistic": 2.0, "dof": 2, "rest_dof": 41, "p_adjusted": 0.5, "scale": 1.0, "spread_level": 0.01, "detectable_spread": 0.9}], '
   errors='{"n": 12, "rmse": 0.1, "rms_whitened": 1.0, "chi2": 12.0, "dof": 12, "p": 0.5, "invalid": 0}'
-  printf '{"effects": [], "verdict": "consistent with noise", "poor_fit": false, "held_out_beyond_noise": false, "before": {"fitted": %s, "held_out_fresh": %s}, "after": {"params": {"k": 0.3}, "fitted": %s, "held_out_fresh": %s}, "measured_free": [], "rounds": [], "independent_signatures": %s, "runs_simulated": 10, "runs_reused": 0, "run_seconds": 1.0, "wall_seconds": 1.0}\n' \
-    "$errors" "$errors" "$errors" "$errors" "$own_seeds" > "$out/summary.json"
+  printf '{"effects": [], "verdict": "consistent with noise", "poor_fit": false, "held_out_beyond_noise": false, "before": {"fitted": %s, "held_out_fresh": %s}, "after": {"params": {"k": 0.3}, "fitted": %s, "held_out_fresh": %s}, "measured_free": [], "rounds": [], %s"independent_signatures": %s, "runs_simulated": 10, "runs_reused": 0, "run_seconds": 1.0, "wall_seconds": 1.0}\n' \
+    "$errors" "$errors" "$errors" "$errors" "$checks" "$own_seeds" > "$out/summary.json"
 fi
 STUB
 chmod +x "$work/gapflow"
@@ -303,28 +310,51 @@ rm -r "$work/cut/replay-x/null-2"
 replay "$work/cut" replay-x 1 || fail "replaying again: $(cat "$work/stderr")"
 [[ $(/usr/bin/python3 -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1]).execute("select key from runs").fetchone()[0])' \
      "$work/cut/replay-x/runs.sqlite") == kept ]] || fail "the replay's store copy read the stale log"
-# studies/form_check_power.sh: DRAWS null and quadratic-drag twins on their seeds (draw 1 the blind
-# study's null-1 and outside-quadratic-16 at the offset), each its own model seed; a resume makes
-# nothing again; another setting is refused before anything is written.
-power() { "$src/studies/form_check_power.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
+# studies/form_check_power.sh: DRAWS null and quadratic-drag twins on their seeds (draw 1 on the blind
+# study's null-1 and outside-quadratic-16 seeds at the offset), each its own model seed, summarised
+# with the folder's own design and seeds; the check's power against the drag from the null twins'
+# J_mid; a resume makes nothing again, a cut-off calibration or a twin without its truth is made
+# again; other settings, a foreign folder, bad numbers are refused before anything is written.
+power() { STUB_POINTS=1 "$src/studies/form_check_power.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
+wide=data/blind/design_v4_wide.toml
 : > "$work/log"
-DRAWS=2 power "$work/power" 1 19000 $design || fail "form_check_power.sh: $(cat "$work/stderr")"
+DRAWS=2 power "$work/power" 1 19000 $wide || fail "form_check_power.sh: $(cat "$work/stderr")"
 [[ $(grep -c '^twin ' "$work/log") == 4 && $(grep -c '^calibrate ' "$work/log") == 4 ]] || fail "not 4 twins and 4 calibrations"
 grep -q -- "--seed 19101 .*--name null-1 .*--model-seed 19101000$" "$work/log" || fail "null-1 not on its seeds"
 grep -q -- "--seed 19143 .*--name quadratic-16-1 .*--set particles.quadratic_drag_per_m=16 --model-seed 19143000$" "$work/log" ||
-  fail "quadratic-16-1 not the blind study's outside-quadratic-16 at the offset: $(grep quadratic-16-1 "$work/log")"
+  fail "quadratic-16-1 not on the blind study's outside-quadratic-16 seeds at the offset: $(grep quadratic-16-1 "$work/log")"
 grep -q -- "--seed 19144 .*--name quadratic-16-2 .*--model-seed 19144000$" "$work/log" || fail "quadratic-16-2 not on its seeds"
 if grep -q -- "--name null-.*--set" "$work/log"; then fail "a null twin was planted with something"; fi
-[[ -s $work/power/form_checks.txt && -s $work/power/quadratic_drag_visibility-2.txt ]] || fail "no form-check table or visibility"
+grep -q "Made by \`studies/form_check_power.sh\` (twins of \`$wide\`" "$work/power/report.md" ||
+  fail "report.md does not say what made it of which design: $(grep 'Made by' "$work/power/report.md")"
+grep -q "data of 10 runs per point; every twin its own model seed" "$work/power/report.md" || fail "report.md misstates the seeds"
+[[ -s $work/power/form_checks.txt ]] || fail "no form-check table"
+grep -q "^median 0.900 " "$work/power/quadratic_drag_visibility-2.txt" &&
+  grep -q "^quadratic-16-2: .*power at the spread a quadratic drag asks for (0.900): 0.80 at the stated noise" \
+  "$work/power/quadratic_drag_visibility-2.txt" || fail "no power: $(cat "$work/power/quadratic_drag_visibility-2.txt")"
 : > "$work/log"
-DRAWS=2 power "$work/power" 1 19000 $design || fail "form_check_power.sh resumed: $(cat "$work/stderr")"
-[[ ! -s $work/log ]] || fail "a resume ran gapflow: $(head -1 "$work/log")"
+DRAWS=2 power "$work/power" 1 019000 $wide || fail "form_check_power.sh resumed: $(cat "$work/stderr")"
+[[ ! -s $work/log ]] || fail "a resume (offset 019000, read as 19000) ran gapflow: $(head -1 "$work/log")"
+: > "$work/power/null-2.time"               # cut off: time made its record and the command never ended
+rm "$work/power/truth/quadratic-16-1.json"  # cut off between the twin's data file and its truth
+DRAWS=2 power "$work/power" 1 19000 $wide || fail "form_check_power.sh after a cut: $(cat "$work/stderr")"
+[[ $(cut -d' ' -f1 "$work/log" | sort | uniq -c | tr -s ' ' | tr '\n' ';') == " 2 calibrate; 1 twin;" ]] &&
+  grep -q "^calibrate .*null-2.toml" "$work/log" && grep -q "^twin .*--name quadratic-16-1 " "$work/log" ||
+  fail "not exactly the cut-off calibration and twin made again: $(cat "$work/log")"
+: > "$work/log"
 set +e
-DRAWS=3 power "$work/power" 1 19000 $design; rc_draws=$?
-TWIN_REPLICATES=20 DRAWS=2 power "$work/power" 1 19000 $design; rc_runs=$?
-set -e
-[[ $rc_draws == 2 && $rc_runs == 2 ]] || fail "other settings not refused: exits $rc_draws $rc_runs"
+DRAWS=3 power "$work/power" 1 19000 $wide; rc_draws=$?
+TWIN_REPLICATES=20 DRAWS=2 power "$work/power" 1 19000 $wide; rc_runs=$?
+DRAWS=2 power "$work/power" 1 19001 $wide; rc_offset=$?
 grep -q "made with other settings" "$work/stderr" || fail "no clear error: $(cat "$work/stderr")"
-[[ ! -s $work/log && $(grep -c '^draws 2$' "$work/power/settings") == 1 ]] || fail "a refused run ran gapflow or changed the record"
+DRAWS=2 power "$work/own" 1 19000 $wide; rc_foreign=$?
+grep -q "no record of this script's settings" "$work/stderr" || fail "a foreign folder: $(cat "$work/stderr")"
+DRAWS=08x power "$work/new" 1 19000 $wide; rc_bad=$?
+grep -q "DRAWS is '08x'; allowed: a whole number from 1 to 40" "$work/stderr" || fail "bad DRAWS: $(cat "$work/stderr")"
+set -e
+[[ "$rc_draws $rc_runs $rc_offset $rc_foreign $rc_bad" == "2 2 2 2 2" ]] ||
+  fail "not refused: exits $rc_draws $rc_runs $rc_offset $rc_foreign $rc_bad"
+[[ ! -s $work/log && ! -e $work/new && $(grep -c '^draws 2$' "$work/power/settings") == 1 ]] ||
+  fail "a refused run ran gapflow, wrote or changed the record"
 
 echo "ok"
