@@ -2,7 +2,8 @@
 # Carries an unfinished blind pass from one machine to the next through the repository. A pass of
 # 28 calibrations takes 4.5-7 h on 2 cores; a session's machine lasts less, and nothing outside the
 # repository survives it. What studies/calibration_blind.sh needs to resume is small: its records
-# (seed_offset, design, calibrate_options, model_seeds, twin_replicates), the twins and their
+# (seed_offset, design, calibrate_options, model_seeds, twin_replicates; and settings, made_by for a
+# folder of studies/form_check_power.sh, carried the same way), the twins and their
 # truths, and each finished calibration (its folder and .time). Replays of the pass run as far as it
 # has got (studies/calibration_replay.sh PASS DIR: PASS/DIR/) are carried the same way. The run
 # stores (*.sqlite*) are not: with MODEL_SEEDS=per-twin no run is shared between calibrations, and a
@@ -30,7 +31,7 @@ usage() { echo "usage: studies/blind_pass_carry.sh save PASS CARRY | restore CAR
 verb=$1; from=${2%/}; to=${3%/}
 [[ -d $from ]] || { echo "error: no folder $from" >&2; exit 2; }
 
-records=(seed_offset design calibrate_options model_seeds twin_replicates)
+records=(seed_offset design calibrate_options model_seeds twin_replicates settings made_by)
 source studies/blind_cases.sh   # calibration_ended_well
 
 # copy_once SRC DST: copies SRC to DST (through a temporary name, so that DST is whole or absent)

@@ -356,5 +356,10 @@ set -e
   fail "not refused: exits $rc_draws $rc_runs $rc_offset $rc_foreign $rc_bad"
 [[ ! -s $work/log && ! -e $work/new && $(grep -c '^draws 2$' "$work/power/settings") == 1 ]] ||
   fail "a refused run ran gapflow, wrote or changed the record"
+# Carried to another machine (blind_pass_carry.sh, as a pass) and resumed there: nothing made again.
+"$src/studies/blind_pass_carry.sh" save "$work/power" "$work/power-carry" > /dev/null 2>&1 || fail "carrying the power folder"
+"$src/studies/blind_pass_carry.sh" restore "$work/power-carry" "$work/power-there" > /dev/null 2>&1 || fail "restoring it"
+DRAWS=2 power "$work/power-there" 1 19000 $wide || fail "form_check_power.sh on the carried folder: $(cat "$work/stderr")"
+[[ ! -s $work/log ]] || fail "the carried folder's resume ran gapflow: $(head -1 "$work/log")"
 
 echo "ok"
