@@ -6,7 +6,7 @@
 # model by GAPFLOW, a binary whose form checks report their detectable spread (9076e4e or later).
 # Then, in OUT: report.md and cases.csv (calibrate/blind_summary.py), form_checks.txt (what each
 # calibration added, its verdict, its smallest adjusted p and detectable spreads) and, per quadratic
-# twin read as a linear drag, quadratic_drag_visibility-K.txt: the spread a quadratic drag
+# twin, quadratic_drag_visibility-K.txt: the spread a quadratic drag
 # asks for across the inclines (from the null twins' J_mid), the check's detectable spread there and
 # its power against it on that draw.
 #
@@ -46,8 +46,10 @@ drag_per_m=16
 # seeds' rule, the drag) makes another experiment, refused in this OUT.
 design_csv=$(sed -n 's/^csv *= *"\(.*\)".*/\1/p' "$design")
 design_scenario=$(sed -n 's/^scenario *= *"\(.*\)".*/\1/p' "$design")
-settings="design $design $(cd "$(dirname "$design")" && cat "$(basename "$design")" ${design_csv:+"$design_csv"} \
-  ${design_scenario:+"$design_scenario"} | sha256sum | cut -c1-16)
+design_hash=$(cd "$(dirname "$design")" && cat "$(basename "$design")" ${design_csv:+"$design_csv"} \
+  ${design_scenario:+"$design_scenario"} | sha256sum | cut -c1-16) ||  # pipefail: a file not read fails it
+  { echo "error: could not read $design with its csv '$design_csv' and scenario '$design_scenario'" >&2; exit 2; }
+settings="design $design $design_hash
 seed_offset $seed_offset (null-K: + 100 + K; quadratic-16-K: + 142 + K; model seed 1000 x seed)
 draws $draws
 twin_replicates $twin_replicates
@@ -111,10 +113,15 @@ done <<< "$cases"
 /usr/bin/python3 calibrate/form_check_table.py "$out" > "$out/form_checks.txt"
 for ((k = 1; k <= draws; ++k)); do
   # A quadratic twin not read as a linear drag has no power of that check to give: the file says
-  # what it was read as instead.
-  if ! /usr/bin/python3 calibrate/quadratic_drag_visibility.py "$out" "$out" "quadratic-16-$k" \
-      > "$out/quadratic_drag_visibility-$k.txt" 2> "$out/quadratic_drag_visibility-$k.err"; then
-    cat "$out/quadratic_drag_visibility-$k.err" >> "$out/quadratic_drag_visibility-$k.txt"
+  # what it was read as instead (the tool's exit 2); any other failure is an error.
+  rc=0
+  /usr/bin/python3 calibrate/quadratic_drag_visibility.py "$out" "$out" "quadratic-16-$k" \
+    > "$out/quadratic_drag_visibility-$k.txt" 2> "$out/quadratic_drag_visibility-$k.err" || rc=$?
+  if (( rc == 2 )); then cat "$out/quadratic_drag_visibility-$k.err" >> "$out/quadratic_drag_visibility-$k.txt"; fi
+  if (( rc != 0 && rc != 2 )); then
+    cat "$out/quadratic_drag_visibility-$k.err" >&2
+    echo "error: quadratic_drag_visibility.py failed on quadratic-16-$k (exit $rc)" >&2
+    exit 1
   fi
   rm -f "$out/quadratic_drag_visibility-$k.err"
 done
