@@ -41,7 +41,10 @@ twin_replicates=$(whole TWIN_REPLICATES "${TWIN_REPLICATES:-10}" 2 1000)
 gapflow=$(realpath "$GAPFLOW")
 [[ -f $design ]] || { echo "error: no design file $design" >&2; exit 2; }
 design=$(realpath --relative-to=. "$design")
-drag_per_m=16
+# The drag and its seed are the blind study's outside-quadratic-16 case's (studies/blind_cases.sh).
+source studies/blind_cases.sh
+read -r _ _ quadratic_seed quadratic_planted <<< "$(grep '^outside-quadratic-16 ' <<< "$blind_cases")"
+drag_per_m=${quadratic_planted##*=}
 # What the folder is made of: a change to any of it (the design's files, the binary, the counts, the
 # seeds' rule, the drag) makes another experiment, refused in this OUT.
 design_csv=$(sed -n 's/^csv *= *"\(.*\)".*/\1/p' "$design")
@@ -50,7 +53,7 @@ design_hash=$(cd "$(dirname "$design")" && cat "$(basename "$design")" ${design_
   ${design_scenario:+"$design_scenario"} | sha256sum | cut -c1-16) ||  # pipefail: a file not read fails it
   { echo "error: could not read $design with its csv '$design_csv' and scenario '$design_scenario'" >&2; exit 2; }
 settings="design $design $design_hash
-seed_offset $seed_offset (null-K: + 100 + K; quadratic-16-K: + 142 + K; model seed 1000 x seed)
+seed_offset $seed_offset (null-K: + 100 + K; quadratic-16-K: + $((quadratic_seed - 1)) + K; model seed 1000 x seed)
 draws $draws
 twin_replicates $twin_replicates
 quadratic_drag_per_m $drag_per_m
@@ -75,11 +78,10 @@ echo per-twin > "$out/model_seeds"
 echo "$twin_replicates" > "$out/twin_replicates"
 echo "studies/form_check_power.sh" > "$out/made_by"
 
-source studies/blind_cases.sh
 cases=""
 for ((k = 1; k <= draws; ++k)); do
   cases+="null-$k $((seed_offset + 100 + k))"$'\n'
-  cases+="quadratic-16-$k $((seed_offset + 142 + k)) set:particles.quadratic_drag_per_m=$drag_per_m"$'\n'
+  cases+="quadratic-16-$k $((seed_offset + quadratic_seed - 1 + k)) $quadratic_planted"$'\n'
 done
 
 while read -r id seed planted; do
