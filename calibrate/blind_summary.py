@@ -152,6 +152,8 @@ def main(out):
             # The form check (calibrate/form_check.hpp): an added effect's size differs across the design;
             # absent from summaries made before it.
             "form_differs": summary.get("form_differs", ""),
+            # The drag's law in the speed not determined by the design (form_check.hpp); absent before it.
+            "law_undetermined": summary.get("law_undetermined", ""),
             "below_best_case_bound": ("unseen" if unseen_step else all(below) if below and None not in below else "")
                                      if bounds else "",
             "signal_chi2": signal["chi2"] if signal else "",
@@ -290,7 +292,7 @@ def main(out):
         f"* null twins where an effect was added: {pct(fp, len(nulls))}; called \"unexplained\" (nothing added): "
         f"{pct(null_unexplained, len(nulls))}",
         f"* outside-the-catalogue twins: "
-        f"{', '.join(r['said'] + (' (form check: size differs)' if r['form_differs'] is True else '') for r in outside) or 'none'}",
+        f"{', '.join(r['said'] + (' (form check: size differs)' if r['form_differs'] is True else '') + (' (law in the speed not determined)' if r['law_undetermined'] is True else '') for r in outside) or 'none'}",
         f"* two-effect twins: {', '.join(r['case'] + ' -> ' + r['said'] for r in two) or 'none'}",
         f"* 95 % intervals of recovered sizes that contain the planted value: {pct(covered, intervals)}",
         f"* where an effect was planted and found, held-out RMSE (fresh seeds; fit scale, mixing observables' units) at "

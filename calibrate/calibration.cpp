@@ -584,6 +584,10 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   form.alpha = def.alpha;
   out.form_checks = form_checks(data, surface, out.after, form);
   out.form_differs = form_differs(out.form_checks, def.alpha);
+  std::vector<std::string> added;
+  for (const AddedEffect& e : out.effects) added.push_back(e.effect);
+  out.law_power = lowest_law_power(out.form_checks, added);
+  out.law_undetermined = out.law_power < form.power;  // NaN (no drag added): nothing to determine
   const VerdictEvidence evidence{.attribution_allowed = def.max_effects > 0,
                                  .effects_added = static_cast<int>(out.effects.size()),
                                  .fitted_p_before = out.before.fitted.chi.p,
@@ -591,7 +595,8 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
                                  .held_out_n = out.after.held_out_fresh.n,
                                  .held_out_fresh_p = out.held_out_fresh_fit_aware.p,
                                  .alpha = def.alpha,
-                                 .form_differs = out.form_differs};
+                                 .form_differs = out.form_differs,
+                                 .law_undetermined = out.law_undetermined};
   out.poor_fit = poor_fit(evidence);
   out.held_out_beyond_noise = held_out_beyond_noise(evidence);
   out.verdict = final_verdict(evidence);

@@ -161,6 +161,11 @@ struct CalibrationResult {
   // whether any is significant (Bonferroni over them at alpha).
   std::vector<FormCheck> form_checks;
   bool form_differs = false;
+  // Whether the design determines each added drag's law in the speed (form_check.hpp, "the law in
+  // the speed"): the lowest over those drags of their checks' best power against another law (NaN:
+  // no drag added, or one no check could ask), and whether it is below the detectable power.
+  double law_power = NAN;
+  bool law_undetermined = false;
   double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)
   double surface_noise_ratio = NAN;  // the baseline's true model variance over what the surface reports, and
   double node_correlation = NAN;     // the replicates' correlation between nodes it comes from (surface_noise.hpp)

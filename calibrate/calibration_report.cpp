@@ -94,13 +94,27 @@ void write_form_checks_md(std::ostream& o, const CalibrationResult& r) {
        "the fitted departure, that it flags with power 0.8 at the stated noise (a trend straight in the level's value; "
        "100 %: the ends differ by the fitted departure; where the scale is below 1 the noise is smaller than stated and "
        "the spread smaller by sqrt(scale)). A drag k v^2 read as a linear drag needs about the spheres' "
-       "relative speed difference across the column.\n\n| effect | split by | levels | statistic | dof | rest dof | "
-       "scale | p | adjusted p | detectable spread |\n|---|---|---|---|---|---|---|---|---|---|\n";
+       "relative speed difference across the column. *Another law*: for a drag, along the incline, the spread a drag "
+       "quadratic in the speed read as this linear one asks (sizes as sqrt(sin theta): speeds from rest on the board, "
+       "to first order) and the check's power against it at the stated noise; below 0.8 the design does not determine "
+       "the drag's law, and the verdict says so.\n\n| effect | split by | levels | statistic | dof | rest dof | "
+       "scale | p | adjusted p | detectable spread | another law: spread, power |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const FormCheck& c : r.form_checks)
-    o << fmt::format("| {} | {} | {} | {:.2f} | {} | {} | {:.2f} | {:.3g} | {:.3g} | {} |\n", c.effect, c.column,
-                     c.levels, c.statistic, c.dof, c.rest_dof, c.scale, c.p, c.p_adjusted, spread_text(c.detectable_spread));
+    o << fmt::format("| {} | {} | {} | {:.2f} | {} | {} | {:.2f} | {:.3g} | {:.3g} | {} | {} |\n", c.effect, c.column,
+                     c.levels, c.statistic, c.dof, c.rest_dof, c.scale, c.p, c.p_adjusted, spread_text(c.detectable_spread),
+                     std::isfinite(c.law_power) ? fmt::format("{:.0f} %, {:.2f}", 100 * c.law_spread, c.law_power) : "-");
   o << (r.form_differs ? "\nAt least one differs (adjusted p < alpha): the verdict says so.\n"
                        : "\nNone differs at the loop's level.\n");
+  if (std::isfinite(r.law_power))
+    o << fmt::format("\nThe added drag's law in the speed: {}.\n",
+                     r.law_undetermined
+                         ? fmt::format("not determined by this design (power {:.2f} against a drag quadratic in the "
+                                       "speed; 0: no check along the incline could ask); a drag of another law may be "
+                                       "acting, and the size is that of the linear drag that mimics it here",
+                                       r.law_power)
+                         : fmt::format("the check along the incline had power {:.2f} against a drag quadratic in the "
+                                       "speed and did not flag it",
+                                       r.law_power));
 }
 
 void write_summary_json(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
@@ -137,14 +151,16 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                      json_number(e.value), json_number(e.lo95), json_number(e.hi95), e.interval_bounded ? "true" : "false");
   }
   o << "],\n";
+  o << fmt::format("  \"law_power\": {},\n  \"law_undetermined\": {},\n", json_number(r.law_power),
+                   r.law_undetermined ? "true" : "false");
   o << fmt::format("  \"form_differs\": {},\n  \"form_checks\": [", r.form_differs ? "true" : "false");
   for (std::size_t i = 0; i < r.form_checks.size(); ++i) {
     const FormCheck& c = r.form_checks[i];
-    o << fmt::format(R"({}{{"effect": {}, "column": {}, "levels": {}, "statistic": {}, "dof": {}, "rest_dof": {}, "scale": {}, "p": {}, "p_adjusted": {}, "trend_ordered": {}, "spread_level": {}, "detectable_spread": {}}})",
+    o << fmt::format(R"({}{{"effect": {}, "column": {}, "levels": {}, "statistic": {}, "dof": {}, "rest_dof": {}, "scale": {}, "p": {}, "p_adjusted": {}, "trend_ordered": {}, "spread_level": {}, "detectable_spread": {}, "law_spread": {}, "law_power": {}}})",
                      i ? ", " : "", json_string(c.effect), json_string(c.column), c.levels, json_number(c.statistic),
                      c.dof, c.rest_dof, json_number(c.scale), json_number(c.p), json_number(c.p_adjusted),
                      std::isnan(c.trend_noncentrality) ? "false" : "true", json_number(c.spread_level),
-                     json_number(c.detectable_spread));
+                     json_number(c.detectable_spread), json_number(c.law_spread), json_number(c.law_power));
   }
   o << "],\n";
   o << "  \"before\": " << json_state(r.before) << ",\n";
@@ -258,6 +274,9 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
     if (r.form_differs)
       o << " An added effect's size differs across the design (section \"Is each added effect one size across the "
            "design?\"): such an effect may be acting in its place.";
+    if (r.law_undetermined)
+      o << " This design does not determine the added drag's law in the speed (section \"Is each added effect one "
+           "size across the design?\"): a drag of another law would be read as this one.";
   }
   if (r.poor_fit)
     o << (r.effects.empty() ? " The fit is poor (chi2 p < 0.01 on the fitted points)."

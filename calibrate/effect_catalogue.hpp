@@ -32,6 +32,10 @@ struct EffectDef {
   double lo = 0, hi = 0;  // plausible range of the key's value (lab units)
   double step = 0;        // physical step for the signature (key units; sign = direction)
   EffectScope scope;      // where it can act
+  // A force that is a power of the speed (a drag): the loop reads it with one law (the catalogue's,
+  // linear), and the form check asks whether the design could tell that law from another one
+  // (form_check.hpp, "the law in the speed").
+  bool speed_law = false;
 };
 
 // The catalogue, in a fixed order.

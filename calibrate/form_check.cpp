@@ -3,6 +3,7 @@
 #include "calibrate/attribution.hpp"
 #include "calibrate/calibration.hpp"
 #include "calibrate/detectability.hpp"
+#include "calibrate/effect_catalogue.hpp"
 #include "calibrate/error_measures.hpp"
 #include "calibrate/fit.hpp"
 #include "common/statistics.hpp"
@@ -12,28 +13,47 @@
 #include <cstdlib>
 #include <limits>
 #include <map>
+#include <numbers>
 
 namespace gapflow {
 namespace {
 
 constexpr double kRoundingShare = 1e-9;  // of a squared norm: below it, what is left is rounding
 
-// The partitions a size may differ over: each design column, and the observable where the fitted
-// points measure more than one. Each gives a level's label per point row. Design values are TOML
-// literals as the loader normalised them (number_text: 4.5 and 4.50 are one level).
-std::vector<std::pair<std::string, std::vector<std::string>>> partitions(const DataFile& data,
-                                                                         const std::vector<std::size_t>& points) {
-  std::vector<std::pair<std::string, std::vector<std::string>>> out;
+constexpr const char* kInclineKey = "plane.incline_deg";
+
+// A partition a size may differ over: a design column (with the scenario key it sets), or the
+// observable; a level's label per point row.
+struct Partition {
+  std::string column;
+  std::string key;  // "" for the observable
+  std::vector<std::string> level;
+};
+
+// Each design column, and the observable where the fitted points measure more than one. Design
+// values are TOML literals as the loader normalised them (number_text: 4.5 and 4.50 are one level).
+std::vector<Partition> partitions(const DataFile& data, const std::vector<std::size_t>& points) {
+  std::vector<Partition> out;
   for (std::size_t c = 0; c < data.design.size(); ++c) {
-    std::vector<std::string> level;
-    for (std::size_t i : points) level.push_back(data.points[i].design[c]);
-    out.emplace_back(data.design[c].column, std::move(level));
+    Partition p{data.design[c].column, data.design[c].key, {}};
+    for (std::size_t i : points) p.level.push_back(data.points[i].design[c]);
+    out.push_back(std::move(p));
   }
   std::vector<std::string> observed;
   for (std::size_t i : points) observed.push_back(to_string(data.points[i].observable));
   if (std::any_of(observed.begin(), observed.end(), [&](const std::string& o) { return o != observed.front(); }))
-    out.emplace_back("observable", std::move(observed));
+    out.push_back({"observable", "", std::move(observed)});
   return out;
+}
+
+// The sizes another law in the speed asks along this partition, where it is the incline (in
+// degrees: the key's own unit) and the effect has a law in the speed; empty elsewhere.
+LawSize law_along(const Partition& part, const EffectDef* effect, const DataFile& data, double exponent) {
+  if (effect == nullptr || !effect->speed_law || part.key != kInclineKey) return {};
+  const auto column = std::find_if(data.design.begin(), data.design.end(),
+                                   [&](const DesignColumn& d) { return d.column == part.column; });
+  if (column == data.design.end() || column->in_diameters) return {};
+  return [exponent](const std::string& level) { return speed_law_size(level, exponent); };
 }
 
 // Each kept level's place on a straight trend, 0 at the lowest level and 1 at the highest: by the
@@ -70,10 +90,26 @@ double trend_noncentrality(const Eigen::MatrixXd& P, const Eigen::MatrixXd& U, c
   return left > kRoundingShare * shift.squaredNorm() ? left : 0.0;
 }
 
+// The other law's sizes at the kept levels, relative to their mean: its spread, and the
+// noncentrality |P U s|^2 they add per key unit^2 of departure (0 where the fitted directions take
+// them in, as trend_noncentrality judges). Nothing where a level has no size.
+void set_law(FormCheck& c, const Eigen::MatrixXd& P, const Eigen::MatrixXd& U, const std::vector<std::string>& labels,
+             const LawSize& law_size) {
+  Eigen::VectorXd sizes(static_cast<Eigen::Index>(labels.size()));
+  for (std::size_t l = 0; l < labels.size(); ++l) sizes(static_cast<Eigen::Index>(l)) = law_size(labels[l]);
+  if (!sizes.allFinite() || !(sizes.mean() > 0)) return;
+  sizes /= sizes.mean();
+  c.law_spread = sizes.maxCoeff() - sizes.minCoeff();
+  const Eigen::VectorXd shift = U * sizes;
+  const double left = (P * shift).squaredNorm();
+  c.law_noncentrality = left > kRoundingShare * shift.squaredNorm() ? left : 0.0;
+}
+
 }  // namespace
 
 FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u,
-                      const std::vector<std::string>& level, int informative_rows, const FormCheckDef& def) {
+                      const std::vector<std::string>& level, int informative_rows, const FormCheckDef& def,
+                      const LawSize& law_size) {
   FormCheck c;
   // The rows of each level the effect moves; rows past `level` (the measurements') have none.
   std::map<std::string, std::vector<Eigen::Index>> rows;
@@ -115,7 +151,15 @@ FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   c.scale = rest / c.rest_dof;
   c.p = split_p(c.statistic, rest, c.dof, c.rest_dof, r.squaredNorm());
   c.trend_noncentrality = trend_noncentrality(P, U, trend_of(kept_labels));
+  if (law_size) set_law(c, P, U, kept_labels, law_size);
   return c;
+}
+
+double speed_law_size(const std::string& degrees, double exponent) {
+  char* end = nullptr;
+  const double theta = std::strtod(degrees.c_str(), &end);
+  if (degrees.empty() || *end != '\0' || !(theta > 0 && theta <= 90)) return std::numeric_limits<double>::quiet_NaN();
+  return std::pow(std::sin(theta * std::numbers::pi / 180), (exponent - 1) / 2);
 }
 
 double split_p(double statistic, double rest, int dof, int rest_dof, double residual_norm2) {
@@ -145,11 +189,12 @@ std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface,
     const auto at = std::find(slopes.keys.begin(), slopes.keys.end(), e.key);
     if (at == slopes.keys.end()) continue;  // no slope (a range of zero width)
     const Eigen::VectorXd u = f.X.col(at - slopes.keys.begin());
-    for (const auto& [column, level] : parts) {
-      FormCheck c = check_split(f.r, f.X, u, level, f.informative, def);
+    for (const Partition& part : parts) {
+      const LawSize law = law_along(part, find_effect(e.effect), data, def.other_law_exponent);
+      FormCheck c = check_split(f.r, f.X, u, part.level, f.informative, def, law);
       if (c.dof == 0) continue;
       c.effect = e.effect;
-      c.column = column;
+      c.column = part.column;
       checks.push_back(c);
       departure.push_back(after.params.get(e.key, e.neutral) - e.neutral);
     }
@@ -160,12 +205,33 @@ std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface,
     c.p_adjusted = std::min(1.0, c.p * m);
     c.spread_level = def.alpha / m;
     c.detectable_spread = detectable_spread(c, departure[i], c.spread_level, def.power);
+    if (std::isfinite(c.law_noncentrality))
+      c.law_power = f_test_power(c.law_noncentrality * departure[i] * departure[i], c.dof, c.rest_dof, c.spread_level);
   }
   return checks;
 }
 
 bool form_differs(const std::vector<FormCheck>& checks, double alpha) {
   return std::any_of(checks.begin(), checks.end(), [&](const FormCheck& c) { return c.p_adjusted < alpha; });
+}
+
+double law_power(const std::vector<FormCheck>& checks, const std::string& effect) {
+  double best = std::numeric_limits<double>::quiet_NaN();
+  for (const FormCheck& c : checks)
+    if (c.effect == effect && std::isfinite(c.law_power) && !(c.law_power <= best)) best = c.law_power;
+  return best;
+}
+
+double lowest_law_power(const std::vector<FormCheck>& checks, const std::vector<std::string>& added) {
+  double lowest = std::numeric_limits<double>::quiet_NaN();
+  for (const std::string& effect : added) {
+    const EffectDef* e = find_effect(effect);
+    if (e == nullptr || !e->speed_law) continue;
+    double power = law_power(checks, effect);
+    if (std::isnan(power)) power = 0;
+    if (!(power >= lowest)) lowest = power;
+  }
+  return lowest;
 }
 
 }  // namespace gapflow

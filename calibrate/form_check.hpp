@@ -32,10 +32,26 @@
 // below 1, the noise is smaller than stated and the spread smaller by sqrt(scale)), so that a
 // reader can set it against what another form would need (a drag k v^2 read as linear needs a
 // spread of about the spheres' relative speed difference across the column).
+//
+// The law in the speed. An effect whose force is a power of the speed (EffectDef::speed_law: the
+// linear drag, force m gamma v) can be read with the wrong law: a drag m k v^n acts at speed v as a
+// linear one of size k v^(n-1), so read as linear it asks for sizes that follow v^(n-1) across the
+// design. Along the incline every speed on the board scales, to first order, as sqrt(g L sin theta)
+// (rolling from rest in a fixed geometry; the friction and rolling resistance that oppose it, about
+// mu cos theta, left out): the sizes asked for follow sin(theta)^((n-1)/2). Measured on blind null
+// twins, J_mid (which at a fixed packing follows the outlet speed) spread 0.872-0.910 across 3-20 deg
+// against sqrt(sin theta)'s 0.900 (results/form-check-wide-inclines). For the check along a column
+// that sets plane.incline_deg, the sizes that law asks for (other_law_exponent; relative to their
+// mean over the tested levels, times the fitted departure) give the check's noncentrality exactly,
+// |P U s|^2 (no straight-trend approximation), and from it the check's power against that law at
+// the stated noise. Below `power` the design does not determine the law: whatever the check says,
+// the data could hold a drag of the other law, and the verdict says so (decisions.hpp).
 #pragma once
 
 #include <Eigen/Dense>
 
+#include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -49,6 +65,7 @@ struct FormCheckDef {
   int min_points_per_level = 2;  // fitted points the effect moves that a level needs to be tested
   double alpha = 0.05;           // the loop's level, shared by the checks (Bonferroni)
   double power = 0.8;            // the power at which a spread of sizes counts as detectable
+  double other_law_exponent = 2; // the law a speed-law effect is checked against: force ~ v^n (2: quadratic drag)
 };
 
 struct FormCheck {
@@ -72,14 +89,30 @@ struct FormCheck {
                                    // fitted departure); infinite where no spread can be seen (the
                                    // fitted size at neutral, or the trend taken in by the fitted
                                    // directions); NaN: no order
+  // The law in the speed (speed-law effects along the incline; NaN elsewhere, or where a level is
+  // not a number of degrees).
+  double law_spread = std::numeric_limits<double>::quiet_NaN();  // the spread the other law asks:
+      // (size at the highest level - at the lowest) / their mean over the levels
+  double law_noncentrality = std::numeric_limits<double>::quiet_NaN();  // lambda its sizes add per
+      // key unit^2 of departure (0: the fitted directions take them in)
+  double law_power = std::numeric_limits<double>::quiet_NaN();  // the check's power against it at
+      // spread_level, at the stated noise
 };
 
 // One split (exposed for tests): r the whitened residual rows, X the fitted directions (its columns
 // include u), u the effect's column, level the label of each point row (rows beyond it, the
 // measurements', have none), informative_rows the rows that carry a value. dof 0: nothing tested
 // (fewer than two levels, a split the fitted directions mimic, or no residual left to scale by).
+// law_size, where given, is the size the other law asks at a level (any common scale; NaN for a
+// level it cannot read): it sets law_spread and law_noncentrality.
+using LawSize = std::function<double(const std::string& level)>;
 FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const Eigen::VectorXd& u,
-                      const std::vector<std::string>& level, int informative_rows, const FormCheckDef& def = {});
+                      const std::vector<std::string>& level, int informative_rows, const FormCheckDef& def = {},
+                      const LawSize& law_size = {});
+
+// The linear size a drag ~ v^exponent mimics on an incline of `degrees`, up to a common factor:
+// sin(theta)^((exponent - 1) / 2). NaN for a label that is not a number of degrees in (0, 90].
+double speed_law_size(const std::string& degrees, double exponent);
 
 // The split's p from its statistic S (dof) and the rest of the residual (rest_dof): Fisher's F on
 // S / dof over rest / rest_dof. A rest at or below zero (rounding) with S beyond rounding of the
@@ -99,5 +132,13 @@ std::vector<FormCheck> form_checks(const DataFile& data, const Surface& surface,
 
 // Whether any check's adjusted p is below alpha.
 bool form_differs(const std::vector<FormCheck>& checks, double alpha);
+
+// The highest power against the other law among `effect`'s checks (NaN: none asked it: the design
+// does not vary the incline, or leaves no residual to test in).
+double law_power(const std::vector<FormCheck>& checks, const std::string& effect);
+
+// The lowest law_power over the added effects that have a law in the speed (EffectDef::speed_law),
+// 0 for one that no check could ask (nothing determines its law); NaN where none of them was added.
+double lowest_law_power(const std::vector<FormCheck>& checks, const std::vector<std::string>& added);
 
 }  // namespace gapflow

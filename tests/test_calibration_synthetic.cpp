@@ -248,7 +248,12 @@ TEST(CalibrationSynthetic, ADragFoundAtAFrictionFarFromTheBaselinesIsMeasuredAga
   // (form_check.hpp) says so.
   ASSERT_FALSE(r.form_checks.empty());
   EXPECT_FALSE(r.form_differs) << r.verdict;
-  EXPECT_EQ(r.verdict, "effect found");
+  // Its law in the speed, though, this design (5-12 deg, 4 model replicates) cannot determine: the
+  // check along the incline would hardly see a quadratic drag read as linear (form_check.hpp).
+  EXPECT_LT(r.law_power, 0.8);
+  EXPECT_TRUE(r.law_undetermined);
+  EXPECT_EQ(r.verdict,
+            "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting");
 }
 
 // A drag of another form than the catalogue's (quadratic in the speed: here 1.5 steep^2.5 against
@@ -295,6 +300,14 @@ TEST(CalibrationSynthetic, ALinearDragOnTheSameDesignIsNotFlaggedByTheFormCheck)
   EXPECT_EQ(r.effects.front().effect, "linear_drag");
   ASSERT_FALSE(r.form_checks.empty());
   EXPECT_FALSE(r.form_differs) << r.verdict;
+  // This closed form's outside drag (above) parts from the linear one as steep^1.5, and the check
+  // flags it; a drag quadratic in the speed parts only as sqrt(sin theta), and against that the
+  // check along 5-12 deg has little power even at 16 replicates (0.27 when written): the linear
+  // drag is found, its law is not determined, and the verdict says so.
+  EXPECT_GT(r.law_power, 0.05);
+  EXPECT_LT(r.law_power, 0.8);
+  EXPECT_EQ(r.verdict,
+            "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting");
 }
 
 // The truth beyond the baseline's surface: drag at 5 /s with the friction at 0.2 puts the

@@ -2,6 +2,7 @@
 // behind it on linear problems with known answers, and the verdict it adds. The loop end to end,
 // with an effect of another form than the catalogue's, is in test_calibration_synthetic.cpp.
 #include "calibrate/attribution.hpp"
+#include "calibrate/detectability.hpp"
 #include "calibrate/decisions.hpp"
 #include "calibrate/form_check.hpp"
 #include "common/random.hpp"
@@ -230,6 +231,74 @@ TEST(FormCheck, ATrendTheFittedDirectionsTakeInCannotBeSeen) {
   EXPECT_TRUE(std::isinf(detectable_spread(c, 1.0, 0.05, 0.8)));
 }
 
+TEST(FormCheck, ADragOfSpeedExponentNMimicsALinearSizeThatFollowsTheSpeedToTheNMinusOne) {
+  // Speeds ~ sqrt(sin theta): a quadratic drag's linear size follows sqrt(sin theta), a linear
+  // drag's is one size, a constant force's follows 1 / sqrt(sin theta).
+  EXPECT_NEAR(speed_law_size("30", 2), std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(speed_law_size("90", 2), 1.0, 1e-12);
+  EXPECT_NEAR(speed_law_size("8", 1), 1.0, 1e-12);
+  EXPECT_NEAR(speed_law_size("30", 0), 1 / std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(speed_law_size("12.5", 2) / speed_law_size("5", 2),
+              std::sqrt(std::sin(12.5 * M_PI / 180) / std::sin(5 * M_PI / 180)), 1e-12);
+  for (const char* bad : {"", "flat", "0", "-5", "95", "8deg"}) EXPECT_TRUE(std::isnan(speed_law_size(bad, 2))) << bad;
+}
+
+TEST(FormCheck, ADragOfAnotherLawIsFlaggedAsOftenAsItsStatedPowerSays) {
+  // The truth: a quadratic drag read as a linear one, its linear sizes at 5, 8 and 12 degrees in
+  // proportion to sqrt(sin theta) around the fitted departure (mean over the levels). The check's
+  // power against it (from law_noncentrality, exact: no straight-trend approximation) is the share
+  // of 4000 draws it flags at its level (binomial sd <= 0.8 %).
+  // The departure is set where the stated power is 0.6, so that the draws can tell it from 0.05 and 1.
+  const double alpha = 0.05;
+  const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
+  const Eigen::VectorXd u = effect_sensitivity();
+  const LawSize quadratic = [](const std::string& level) { return speed_law_size(level, 2); };
+  RandomStream rng(23);
+  const FormCheck design = check_split(P * unit_noise(rng), X, u, incline_degree_labels(), kPoints, {}, quadratic);
+  ASSERT_GT(design.law_noncentrality, 0);
+  const double departure =
+      std::sqrt(min_detectable_noncentrality_f(design.dof, design.rest_dof, alpha, 0.6) / design.law_noncentrality);
+  Eigen::Vector3d sizes(speed_law_size("5", 2), speed_law_size("8", 2), speed_law_size("12", 2));
+  sizes /= sizes.mean();
+  EXPECT_NEAR(design.law_spread, sizes.maxCoeff() - sizes.minCoeff(), 1e-12);
+  sizes *= departure;
+  EXPECT_NEAR(design.law_noncentrality * departure * departure, (P * U * sizes).squaredNorm(), 1e-9);
+  const double power = f_test_power(design.law_noncentrality * departure * departure, design.dof, design.rest_dof, alpha);
+  EXPECT_NEAR(power, 0.6, 1e-6);
+  int flagged = 0;
+  const int draws = 4000;
+  for (int k = 0; k < draws; ++k)
+    flagged += check_split(P * (U * sizes + unit_noise(rng)), X, u, incline_degree_labels(), kPoints).p < alpha;
+  EXPECT_NEAR(static_cast<double>(flagged) / draws, power, 0.025);
+  // A linear drag's own law asks one size everywhere: no spread, nothing for the check to see.
+  const FormCheck linear = check_split(P * unit_noise(rng), X, u, incline_degree_labels(), kPoints, {},
+                                       [](const std::string& level) { return speed_law_size(level, 1); });
+  EXPECT_NEAR(linear.law_spread, 0.0, 1e-12);
+  EXPECT_EQ(linear.law_noncentrality, 0.0);
+  // A level that is no incline ("0" of the labels 0, 1, 2): no law asked, the check itself made.
+  const FormCheck unread = check_split(P * unit_noise(rng), X, u, incline_labels(), kPoints, {}, quadratic);
+  EXPECT_EQ(unread.dof, 2);
+  EXPECT_TRUE(std::isnan(unread.law_spread));
+  EXPECT_TRUE(std::isnan(unread.law_noncentrality));
+}
+
+TEST(FormCheck, ADragsLawIsDeterminedOnlyWhereACheckHadThePowerToTellIt) {
+  std::vector<FormCheck> checks(3);
+  checks[0].effect = "linear_drag";  // along the gap: no law asked
+  checks[1].effect = "linear_drag";
+  checks[1].law_power = 0.6;
+  checks[2].effect = "linear_drag";
+  checks[2].law_power = 0.85;
+  EXPECT_NEAR(law_power(checks, "linear_drag"), 0.85, 1e-12);
+  EXPECT_NEAR(lowest_law_power(checks, {"linear_drag"}), 0.85, 1e-12);
+  EXPECT_TRUE(std::isnan(lowest_law_power(checks, {})));  // no drag added: nothing to determine
+  EXPECT_TRUE(std::isnan(lowest_law_power(checks, {"size_scatter"})));  // no law in the speed
+  // A drag added where no check could ask (the design does not vary the incline): undetermined.
+  EXPECT_EQ(lowest_law_power({}, {"linear_drag"}), 0.0);
+  checks[2].law_power = 0.5;
+  EXPECT_NEAR(lowest_law_power(checks, {"size_scatter", "linear_drag"}), 0.6, 1e-12);
+}
+
 TEST(FormCheck, AResidualWhollyInTheSplitIsAMismatchNotNoise) {
   // No noise at all: the residual is the split's own (sizes 1, 3, 6), the rest zero to rounding.
   const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
@@ -268,7 +337,12 @@ TEST(FinalVerdict, AnEffectWhoseSizeDiffersAcrossTheDesignIsFlagged) {
   e.held_out_fresh_p = 1e-4;
   EXPECT_EQ(final_verdict(e), "effect found; the held-out points are still beyond the noise");
   e.held_out_fresh_p = 0.3;
+  e.law_undetermined = true;  // the size differs: said first (a failed test, not a missing one)
+  EXPECT_EQ(final_verdict(e), "effect found; its size differs across the design: an effect of another form may be acting");
   e.form_differs = false;
+  EXPECT_EQ(final_verdict(e),
+            "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting");
+  e.law_undetermined = false;
   EXPECT_EQ(final_verdict(e), "effect found");
 }
 
