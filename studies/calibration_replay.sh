@@ -5,8 +5,11 @@
 # (each calibration's report and summary.json, its log and /usr/bin/time record) and PASS/DIR/report.md, cases.csv by
 # calibrate/blind_summary.py, with a copy of the pass's truth.
 #
-#   GAPFLOW=<binary> studies/calibration_replay.sh PASS DIR [JOBS] [CALIBRATE OPTIONS...]
+#   [ONLY="ID ..."] GAPFLOW=<binary> studies/calibration_replay.sh PASS DIR [JOBS] [CALIBRATE OPTIONS...]
 #
+# ONLY names the twins to replay (the others are left alone, neither replayed nor counted as left):
+# on a machine whose store holds only some calibrations' runs (a pass carried between machines, see
+# below), the ones it ran. A name with no twin in PASS is an error (exit 2).
 # e.g. studies/calibration_replay.sh results/calibration-blind-pass11 replay-one-contender 2 --contenders 1
 # Resumable: run again with the same binary and options, and the calibrations finished are kept and the
 # others continue on DIR/runs.sqlite (a copy of the pass's store, not committed). DIR made with another
@@ -62,10 +65,15 @@ flock -n 9 || { echo "error: another replay is running in $dir" >&2; exit 2; }
 # runs are all in the store before its .time is written, so the copy holds them. The copy is made
 # anew at every start, so that it holds every run the pass has made so far (the replay's own runs of
 # a calibration it had not finished are simulated again, to the same values).
+only=" ${ONLY:-} "
+for id in ${ONLY:-}; do
+  [[ -f $pass/twins/$id.toml ]] || { echo "error: ONLY names '$id'; $pass/twins has no $id.toml" >&2; exit 2; }
+done
 to_replay=() unfinished=0
 for twin in "$pass"/twins/*.toml; do
   [[ -f $twin ]] || continue
   id=$(basename "$twin" .toml)
+  [[ -z ${ONLY:-} || $only == *" $id "* ]] || continue
   calibration_ended_well "$dir" "$id" && continue
   if calibration_ended_well "$pass" "$id"; then to_replay+=("$id"); else unfinished=$((unfinished + 1)); fi
 done

@@ -212,6 +212,16 @@ replay "$work/cut" replay-x 1 || fail "replaying a cut-off pass: $(cat "$work/st
 [[ $(grep -c '^calibrate ' "$work/log") == $((cases - 3)) ]] && ! grep -q "null-[134]" "$work/log" ||
   fail "the replay of a cut-off pass calibrated other twins than the finished ones: $(cat "$work/log")"
 grep -q "2 twin(s) left for a later run" "$work/stderr" || fail "the replay does not say what it left: $(cat "$work/stderr")"
+# ONLY: the twins named, and no other; a name without a twin is refused.
+: > "$work/log"
+ONLY="null-2" replay "$work/cut" replay-only 1 || fail "a replay of one named twin: $(cat "$work/stderr")"
+[[ $(grep -c '^calibrate ' "$work/log") == 1 ]] && grep -q "^calibrate .*null-2.toml" "$work/log" && [[ ! -s $work/stderr ]] ||
+  fail "ONLY=null-2 did not replay exactly null-2: $(cat "$work/log") $(cat "$work/stderr")"
+set +e
+ONLY="null-2 nothing-9" replay "$work/cut" replay-only 1; rc_only=$?
+set -e
+[[ $rc_only == 2 ]] && grep -q "ONLY names 'nothing-9'" "$work/stderr" || fail "an unknown ONLY name: exit $rc_only, $(cat "$work/stderr")"
+rm -r "$work/cut/replay-only"
 carry() { "$src/studies/blind_pass_carry.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
 carry save "$work/cut" "$work/carry" || fail "saving a cut-off pass: $(cat "$work/stderr")"
 [[ -z $(find "$work/carry" -name '*.sqlite*') ]] || fail "a store was carried"
