@@ -450,5 +450,47 @@ class CarriedWallTime(unittest.TestCase):
             self.assertIn("no launches.txt", done.stderr)
 
 
+class LawReplayCompare(unittest.TestCase):
+    """calibrate/law_replay_compare.py: only the law's fields and the drag's verdict may change."""
+
+    def write(self, folder, case, verdict, effects, extra=None, law=None):
+        d = Path(folder) / case
+        d.mkdir(parents=True)
+        s = {"verdict": verdict, "effects": [{"effect": e} for e in effects], "chi2": 1.0, "run_seconds": 5,
+             "form_checks": [{"effect": "linear_drag", "column": "incline_deg", "p_adjusted": 0.5}]}
+        if law is not None:
+            s.update(law_power=law, law_undetermined=law < 0.8)
+            s["form_checks"][0].update(law_spread=0.43, law_power=law)
+        s.update(extra or {})
+        (d / "summary.json").write_text(json.dumps(s))
+
+    def test_the_law_alone_passes_and_anything_else_is_named(self):
+        qualified = "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting"
+        with tempfile.TemporaryDirectory() as tmp:
+            before, after = Path(tmp, "b"), Path(tmp, "a")
+            self.write(before, "drag", "effect found", ["linear_drag"])
+            self.write(after, "drag", qualified, ["linear_drag"], {"run_seconds": 9}, law=0.2)
+            self.write(before, "tilt", "effect found", ["lateral_tilt"])
+            self.write(after, "tilt", "effect found", ["lateral_tilt"])
+            cmd = [sys.executable, str(CALIBRATE / "law_replay_compare.py"), str(before), str(after)]
+            done = subprocess.run(cmd, capture_output=True, text=True)
+            self.assertEqual(done.returncode, 0, done.stdout + done.stderr)
+            self.assertIn("drag: 'effect found' -> '" + qualified + "'; law_power 0.200, undetermined True; "
+                          "linear_drag along incline_deg: spread asked 0.430, power 0.200", done.stdout)
+            self.assertIn("cases compared: 2; with differences beyond the law: 0", done.stdout)
+            # Another field changed, and a verdict changed where no drag was found: both named, exit 1.
+            self.write(before, "gap", "effect found", ["gap_offset"])
+            self.write(after, "gap", qualified, ["gap_offset"], {"chi2": 2.0})
+            done = subprocess.run(cmd, capture_output=True, text=True)
+            self.assertEqual(done.returncode, 1, done.stdout)
+            self.assertIn("  DIFFERS: chi2", done.stdout)
+            self.assertIn("with differences beyond the law: 1 (gap)", done.stdout)
+            (after / "gap" / "summary.json").write_text(json.dumps(json.loads((before / "gap" / "summary.json").read_text())
+                                                                   | {"verdict": qualified}))
+            done = subprocess.run(cmd + ["gap"], capture_output=True, text=True)
+            self.assertIn("DIFFERS: the verdict changed where no linear drag was found", done.stdout)
+            self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
+
+
 if __name__ == "__main__":
     unittest.main()
