@@ -595,7 +595,6 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
                                  .held_out_n = out.after.held_out_fresh.n,
                                  .held_out_fresh_p = out.held_out_fresh_fit_aware.p,
                                  .alpha = def.alpha,
-                                 .form_differs = out.form_differs,
                                  .law_undetermined = out.law_undetermined};
   out.poor_fit = poor_fit(evidence);
   out.held_out_beyond_noise = held_out_beyond_noise(evidence);

@@ -79,7 +79,6 @@ std::string final_verdict(const VerdictEvidence& e) {
   }
   if (poor_fit(e)) return "effect found, poor fit remains";
   if (held_beyond) return "effect found; the held-out points are still beyond the noise";
-  if (e.form_differs) return "effect found; its size differs across the design: an effect of another form may be acting";
   // Not a failed test but a missing one: the design could not have told the drag's law from another.
   return e.law_undetermined
              ? "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting"

@@ -326,20 +326,16 @@ TEST(FormCheck, AnyAdjustedPBelowAlphaFlagsTheForm) {
   EXPECT_FALSE(form_differs({}, 0.05));
 }
 
-TEST(FinalVerdict, AnEffectWhoseSizeDiffersAcrossTheDesignIsFlagged) {
+TEST(FinalVerdict, ADragWhoseLawTheDesignCannotTellIsSaidAfterTheFailedTests) {
   VerdictEvidence e{.effects_added = 1, .fitted_p_before = 1e-6, .fitted_p_after = 0.4, .held_out_n = 12,
-                    .held_out_fresh_p = 0.3, .form_differs = true};
-  EXPECT_EQ(final_verdict(e), "effect found; its size differs across the design: an effect of another form may be acting");
-  // A poor fit or held-out points beyond the noise are said first (they are the stronger flags).
+                    .held_out_fresh_p = 0.3, .law_undetermined = true};
+  // A poor fit or held-out points beyond the noise are said first (failed tests, not a missing one).
   e.fitted_p_after = 1e-4;
   EXPECT_EQ(final_verdict(e), "effect found, poor fit remains");
   e.fitted_p_after = 0.4;
   e.held_out_fresh_p = 1e-4;
   EXPECT_EQ(final_verdict(e), "effect found; the held-out points are still beyond the noise");
   e.held_out_fresh_p = 0.3;
-  e.law_undetermined = true;  // the size differs: said first (a failed test, not a missing one)
-  EXPECT_EQ(final_verdict(e), "effect found; its size differs across the design: an effect of another form may be acting");
-  e.form_differs = false;
   EXPECT_EQ(final_verdict(e),
             "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting");
   e.law_undetermined = false;
