@@ -587,7 +587,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   std::vector<std::string> added;
   for (const AddedEffect& e : out.effects) added.push_back(e.effect);
   out.law_power = lowest_law_power(out.form_checks, added);
-  out.law_undetermined = out.law_power < form.power;  // NaN (no drag added): nothing to determine
+  out.law_undetermined = !laws_established(out.form_checks, added, form.power, def.alpha);
   const VerdictEvidence evidence{.attribution_allowed = def.max_effects > 0,
                                  .effects_added = static_cast<int>(out.effects.size()),
                                  .fitted_p_before = out.before.fitted.chi.p,

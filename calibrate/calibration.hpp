@@ -163,7 +163,8 @@ struct CalibrationResult {
   bool form_differs = false;
   // Whether the design determines each added drag's law in the speed (form_check.hpp, "the law in
   // the speed"): the lowest over those drags of their checks' best power against another law (NaN:
-  // no drag added, or one no check could ask), and whether it is below the detectable power.
+  // no drag added; 0: a drag no check could ask about), and whether the law is not established
+  // (form_check.hpp laws_established: power below 0.8, or a check that asked it flags).
   double law_power = NAN;
   bool law_undetermined = false;
   double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)

@@ -81,7 +81,7 @@ std::string final_verdict(const VerdictEvidence& e) {
   if (held_beyond) return "effect found; the held-out points are still beyond the noise";
   // Not a failed test but a missing one: the design could not have told the drag's law from another.
   return e.law_undetermined
-             ? "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting"
+             ? "effect found; the drag's law in the speed is not established: a drag of another law may be acting"
              : "effect found";
 }
 

@@ -144,16 +144,16 @@ struct VerdictEvidence {
   double held_out_fresh_p = 1;      // chi^2 p of the held-out points after everything, fresh seeds
   double alpha = 0.05;              // level of both chi^2 tests
   double poor_fit_p = 0.01;         // fitted chi^2 p below which a fit with effects is flagged poor
-  bool law_undetermined = false;    // an added drag whose law in the speed the design does not determine
-                                    // (form_check.hpp, "the law in the speed": power below 0.8 against another)
+  bool law_undetermined = false;    // an added drag whose law in the speed is not established (form_check.hpp,
+                                    // laws_established: power below 0.8 against another law, or its check flags)
 };
 
 bool held_out_beyond_noise(const VerdictEvidence& e);
 bool poor_fit(const VerdictEvidence& e);  // the fitted points after everything
 // "consistent with noise" | "unexplained residual" | "unexplained residual: the held-out points are
 // beyond the noise" | "effect found" | "effect found, poor fit remains" | "effect found; the held-out
-// points are still beyond the noise" | "effect found; this design does not determine the drag's law in the
-// speed: a drag of another law may be acting" | "residual not attributed (--max-effects 0)" | ...
+// points are still beyond the noise" | "effect found; the drag's law in the speed is not established: a
+// drag of another law may be acting" | "residual not attributed (--max-effects 0)" | ...
 std::string final_verdict(const VerdictEvidence& e);
 
 }  // namespace gapflow

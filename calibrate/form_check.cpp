@@ -90,19 +90,38 @@ double trend_noncentrality(const Eigen::MatrixXd& P, const Eigen::MatrixXd& U, c
   return left > kRoundingShare * shift.squaredNorm() ? left : 0.0;
 }
 
-// The other law's sizes at the kept levels, relative to their mean: its spread, and the
-// noncentrality |P U s|^2 they add per key unit^2 of departure (0 where the fitted directions take
-// them in, as trend_noncentrality judges). Nothing where a level has no size.
-void set_law(FormCheck& c, const Eigen::MatrixXd& P, const Eigen::MatrixXd& U, const std::vector<std::string>& labels,
+// The other law's sizes, against the one size the fit would give them. Under that law the data
+// hold the effect at a size k s(level) at every row; the fit, linear, reads it as the one departure
+// k c, c the coefficient on u of the least-squares fit of those sizes (U_all s, every level's rows,
+// the untested ones too) on the fitted directions X: a mean of s weighted by each row's whitened
+// sensitivity, not s's plain mean. A fitted departure d then stands for k = d / c, and the check
+// sees lambda = k^2 |P U s|^2 (the kept levels' part; P takes out every fitted direction):
+// law_noncentrality = |P U s|^2 / c^2 per unit^2 of fitted departure, law_spread = (max - min of s
+// over the kept levels) / c. Nothing where a moved row's level has no size or u is no column of X;
+// NaN where c is not positive (the fit would not read the law as this effect at all).
+void set_law(FormCheck& c, const Eigen::MatrixXd& X, const Eigen::VectorXd& u, const std::vector<std::string>& level,
+             const Eigen::MatrixXd& P, const Eigen::MatrixXd& U, const std::vector<std::string>& kept_labels,
              const LawSize& law_size) {
-  Eigen::VectorXd sizes(static_cast<Eigen::Index>(labels.size()));
-  for (std::size_t l = 0; l < labels.size(); ++l) sizes(static_cast<Eigen::Index>(l)) = law_size(labels[l]);
-  if (!sizes.allFinite() || !(sizes.mean() > 0)) return;
-  sizes /= sizes.mean();
-  c.law_spread = sizes.maxCoeff() - sizes.minCoeff();
-  const Eigen::VectorXd shift = U * sizes;
+  Eigen::Index column = -1;
+  for (Eigen::Index j = 0; j < X.cols() && column < 0; ++j)
+    if ((X.col(j) - u).squaredNorm() == 0) column = j;
+  if (column < 0) return;
+  Eigen::VectorXd all_sizes = Eigen::VectorXd::Zero(u.size());  // U_all s
+  for (std::size_t a = 0; a < level.size() && a < static_cast<std::size_t>(u.size()); ++a) {
+    const auto row = static_cast<Eigen::Index>(a);
+    if (u(row) == 0) continue;
+    const double size = law_size(level[a]);
+    if (!std::isfinite(size)) return;
+    all_sizes(row) = u(row) * size;
+  }
+  Eigen::VectorXd kept(static_cast<Eigen::Index>(kept_labels.size()));
+  for (std::size_t l = 0; l < kept_labels.size(); ++l) kept(static_cast<Eigen::Index>(l)) = law_size(kept_labels[l]);
+  const double fitted = X.colPivHouseholderQr().solve(all_sizes)(column);
+  if (!(fitted > 0)) return;
+  c.law_spread = (kept.maxCoeff() - kept.minCoeff()) / fitted;
+  const Eigen::VectorXd shift = U * kept;
   const double left = (P * shift).squaredNorm();
-  c.law_noncentrality = left > kRoundingShare * shift.squaredNorm() ? left : 0.0;
+  c.law_noncentrality = left > kRoundingShare * shift.squaredNorm() ? left / (fitted * fitted) : 0.0;
 }
 
 }  // namespace
@@ -151,7 +170,7 @@ FormCheck check_split(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, const 
   c.scale = rest / c.rest_dof;
   c.p = split_p(c.statistic, rest, c.dof, c.rest_dof, r.squaredNorm());
   c.trend_noncentrality = trend_noncentrality(P, U, trend_of(kept_labels));
-  if (law_size) set_law(c, P, U, kept_labels, law_size);
+  if (law_size) set_law(c, X, u, level, P, U, kept_labels, law_size);
   return c;
 }
 
@@ -232,6 +251,20 @@ double lowest_law_power(const std::vector<FormCheck>& checks, const std::vector<
     if (!(power >= lowest)) lowest = power;
   }
   return lowest;
+}
+
+bool laws_established(const std::vector<FormCheck>& checks, const std::vector<std::string>& added, double power,
+                      double alpha) {
+  for (const std::string& effect : added) {
+    const EffectDef* e = find_effect(effect);
+    if (e == nullptr || !e->speed_law) continue;
+    const bool powered = law_power(checks, effect) >= power;  // NaN (no check asked): false
+    const bool flagged = std::any_of(checks.begin(), checks.end(), [&](const FormCheck& c) {
+      return c.effect == effect && std::isfinite(c.law_power) && c.p_adjusted < alpha;
+    });
+    if (!powered || flagged) return false;
+  }
+  return true;
 }
 
 }  // namespace gapflow

@@ -41,11 +41,13 @@
 // mu cos theta, left out): the sizes asked for follow sin(theta)^((n-1)/2). Measured on blind null
 // twins, J_mid (which at a fixed packing follows the outlet speed) spread 0.872-0.910 across 3-20 deg
 // against sqrt(sin theta)'s 0.900 (results/form-check-wide-inclines). For the check along a column
-// that sets plane.incline_deg, the sizes that law asks for (other_law_exponent; relative to their
-// mean over the tested levels, times the fitted departure) give the check's noncentrality exactly,
-// |P U s|^2 (no straight-trend approximation), and from it the check's power against that law at
-// the stated noise. Below `power` the design does not determine the law: whatever the check says,
-// the data could hold a drag of the other law, and the verdict says so (decisions.hpp).
+// that sets plane.incline_deg, the sizes that law asks for (other_law_exponent), scaled so that the
+// fit would read them as the fitted departure (the fit's coefficient on the effect, a mean weighted
+// by the rows' sensitivities), give the check's noncentrality |P U s|^2 (no straight-trend
+// approximation; linear at the fit, as the check is), and from it the check's power against that
+// law at the stated noise. Below `power` the design does not determine the law: whatever the check
+// says, the data could hold a drag of the other law, and the verdict says so after any failed test
+// (poor fit, held-out points beyond the noise: decisions.hpp).
 #pragma once
 
 #include <Eigen/Dense>
@@ -92,7 +94,7 @@ struct FormCheck {
   // The law in the speed (speed-law effects along the incline; NaN elsewhere, or where a level is
   // not a number of degrees).
   double law_spread = std::numeric_limits<double>::quiet_NaN();  // the spread the other law asks:
-      // (size at the highest level - at the lowest) / their mean over the levels
+      // (size at the highest level - at the lowest) / the one size the fit reads them as
   double law_noncentrality = std::numeric_limits<double>::quiet_NaN();  // lambda its sizes add per
       // key unit^2 of departure (0: the fitted directions take them in)
   double law_power = std::numeric_limits<double>::quiet_NaN();  // the check's power against it at
@@ -136,6 +138,14 @@ bool form_differs(const std::vector<FormCheck>& checks, double alpha);
 // The highest power against the other law among `effect`'s checks (NaN: none asked it: the design
 // does not vary the incline, or leaves no residual to test in).
 double law_power(const std::vector<FormCheck>& checks, const std::string& effect);
+
+// Whether every added effect with a law in the speed has it established as the catalogue's: a
+// check of it along the incline had `power` against the other law, and none of its checks that
+// asked the law flags (adjusted p < alpha: the sizes follow the incline as another law's would).
+// A flag here withholds the claim; it adds no finding (the form check's flags are out of the
+// verdict, decisions.hpp rule 3). True where no such effect was added.
+bool laws_established(const std::vector<FormCheck>& checks, const std::vector<std::string>& added, double power,
+                      double alpha);
 
 // The lowest law_power over the added effects that have a law in the speed (EffectDef::speed_law),
 // 0 for one that no check could ask (nothing determines its law); NaN where none of them was added.

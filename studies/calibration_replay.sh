@@ -35,6 +35,21 @@ gapflow=$(realpath "${GAPFLOW:-build/app/gapflow}")
 [[ -f $pass/runs.sqlite && -d $pass/twins && -d $pass/truth ]] ||
   { echo "error: $pass is not a blind pass with a store (runs.sqlite, twins/, truth/ expected)" >&2; exit 2; }
 made_by="$(sha256sum "$gapflow" | cut -c1-16) $*"
+# ONLY, checked before anything is written: its names split on any whitespace, no globbing.
+only=()
+if [[ -v ONLY ]]; then
+  read -r -d '' -a only <<< "$ONLY" || true
+  ((${#only[@]} > 0)) || { echo "error: ONLY is set but names no twin" >&2; exit 2; }
+  for id in "${only[@]}"; do
+    [[ -f $pass/twins/$id.toml ]] || { echo "error: ONLY names '$id'; $pass/twins has no $id.toml" >&2; exit 2; }
+  done
+fi
+named() {  # ID: whether the replay takes this twin
+  ((${#only[@]} == 0)) && return 0
+  local id
+  for id in "${only[@]}"; do [[ $id == "$1" ]] && return 0; done
+  return 1
+}
 source studies/blind_cases.sh   # calibration_ended_well
 copy_store() {  # SQLite's online backup: a consistent copy even while the pass writes to its store
   rm -f "$dir"/runs.sqlite.partial "$dir"/runs.sqlite.partial-wal "$dir"/runs.sqlite.partial-shm
@@ -65,15 +80,11 @@ flock -n 9 || { echo "error: another replay is running in $dir" >&2; exit 2; }
 # runs are all in the store before its .time is written, so the copy holds them. The copy is made
 # anew at every start, so that it holds every run the pass has made so far (the replay's own runs of
 # a calibration it had not finished are simulated again, to the same values).
-only=" ${ONLY:-} "
-for id in ${ONLY:-}; do
-  [[ -f $pass/twins/$id.toml ]] || { echo "error: ONLY names '$id'; $pass/twins has no $id.toml" >&2; exit 2; }
-done
 to_replay=() unfinished=0
 for twin in "$pass"/twins/*.toml; do
   [[ -f $twin ]] || continue
   id=$(basename "$twin" .toml)
-  [[ -z ${ONLY:-} || $only == *" $id "* ]] || continue
+  named "$id" || continue
   calibration_ended_well "$dir" "$id" && continue
   if calibration_ended_well "$pass" "$id"; then to_replay+=("$id"); else unfinished=$((unfinished + 1)); fi
 done

@@ -465,7 +465,7 @@ class LawReplayCompare(unittest.TestCase):
         (d / "summary.json").write_text(json.dumps(s))
 
     def test_the_law_alone_passes_and_anything_else_is_named(self):
-        qualified = "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting"
+        qualified = "effect found; the drag's law in the speed is not established: a drag of another law may be acting"
         with tempfile.TemporaryDirectory() as tmp:
             before, after = Path(tmp, "b"), Path(tmp, "a")
             self.write(before, "drag", "effect found", ["linear_drag"])

@@ -217,11 +217,20 @@ grep -q "2 twin(s) left for a later run" "$work/stderr" || fail "the replay does
 ONLY="null-2" replay "$work/cut" replay-only 1 || fail "a replay of one named twin: $(cat "$work/stderr")"
 [[ $(grep -c '^calibrate ' "$work/log") == 1 ]] && grep -q "^calibrate .*null-2.toml" "$work/log" && [[ ! -s $work/stderr ]] ||
   fail "ONLY=null-2 did not replay exactly null-2: $(cat "$work/log") $(cat "$work/stderr")"
+rm -r "$work/cut/replay-only"
+: > "$work/log"
+ONLY=$'null-2\tnull-3\n' replay "$work/cut" replay-only 1 || fail "ONLY with a tab and a newline: $(cat "$work/stderr")"
+grep -q "^calibrate .*null-2.toml" "$work/log" || fail "ONLY split on a tab lost null-2: $(cat "$work/log")"
+grep -q "1 twin(s) left for a later run" "$work/stderr" || fail "ONLY's unfinished null-3 not said: $(cat "$work/stderr")"
+rm -r "$work/cut/replay-only"
 set +e
 ONLY="null-2 nothing-9" replay "$work/cut" replay-only 1; rc_only=$?
+grep -q "ONLY names 'nothing-9'" "$work/stderr"; said_only=$?
+ONLY=" " replay "$work/cut" replay-blank 1; rc_blank=$?
 set -e
-[[ $rc_only == 2 ]] && grep -q "ONLY names 'nothing-9'" "$work/stderr" || fail "an unknown ONLY name: exit $rc_only, $(cat "$work/stderr")"
-rm -r "$work/cut/replay-only"
+[[ $rc_only == 2 && $said_only == 0 ]] || fail "an unknown ONLY name: exit $rc_only"
+[[ $rc_blank == 2 && ! -e $work/cut/replay-only && ! -e $work/cut/replay-blank ]] ||
+  fail "a refused ONLY wrote its folder, or a blank ONLY was not refused (exit $rc_blank)"
 carry() { "$src/studies/blind_pass_carry.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
 carry save "$work/cut" "$work/carry" || fail "saving a cut-off pass: $(cat "$work/stderr")"
 [[ -z $(find "$work/carry" -name '*.sqlite*') ]] || fail "a store was carried"

@@ -253,7 +253,7 @@ TEST(CalibrationSynthetic, ADragFoundAtAFrictionFarFromTheBaselinesIsMeasuredAga
   EXPECT_LT(r.law_power, 0.8);
   EXPECT_TRUE(r.law_undetermined);
   EXPECT_EQ(r.verdict,
-            "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting");
+            "effect found; the drag's law in the speed is not established: a drag of another law may be acting");
 }
 
 // A drag of another form than the catalogue's (quadratic in the speed: here 1.5 steep^2.5 against
@@ -278,7 +278,7 @@ TEST(CalibrationSynthetic, ADragOfAnotherFormReadAsLinearDragIsFlaggedByTheFormC
   // The flag is reported, not in the verdict (decisions.hpp, rule 3); the verdict says the drag's law
   // is not determined: against a drag quadratic in the speed this design has little power.
   EXPECT_EQ(r.verdict,
-            "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting");
+            "effect found; the drag's law in the speed is not established: a drag of another law may be acting");
   for (const FormCheck& k : r.form_checks) {
     if (k.column == "incline_deg") {
       EXPECT_LT(k.p_adjusted, 0.05) << k.statistic << " / " << k.scale << " on " << k.dof;
@@ -310,7 +310,7 @@ TEST(CalibrationSynthetic, ALinearDragOnTheSameDesignIsNotFlaggedByTheFormCheck)
   EXPECT_GT(r.law_power, 0.05);
   EXPECT_LT(r.law_power, 0.8);
   EXPECT_EQ(r.verdict,
-            "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting");
+            "effect found; the drag's law in the speed is not established: a drag of another law may be acting");
 }
 
 // The truth beyond the baseline's surface: drag at 5 /s with the friction at 0.2 puts the

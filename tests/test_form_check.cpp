@@ -243,33 +243,11 @@ TEST(FormCheck, ADragOfSpeedExponentNMimicsALinearSizeThatFollowsTheSpeedToTheNM
   for (const char* bad : {"", "flat", "0", "-5", "95", "8deg"}) EXPECT_TRUE(std::isnan(speed_law_size(bad, 2))) << bad;
 }
 
-TEST(FormCheck, ADragOfAnotherLawIsFlaggedAsOftenAsItsStatedPowerSays) {
-  // The truth: a quadratic drag read as a linear one, its linear sizes at 5, 8 and 12 degrees in
-  // proportion to sqrt(sin theta) around the fitted departure (mean over the levels). The check's
-  // power against it (from law_noncentrality, exact: no straight-trend approximation) is the share
-  // of 4000 draws it flags at its level (binomial sd <= 0.8 %).
-  // The departure is set where the stated power is 0.6, so that the draws can tell it from 0.05 and 1.
-  const double alpha = 0.05;
-  const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline(), P = projector_out(X);
+TEST(FormCheck, ALinearDragsOwnLawAsksNothingAndALevelThatIsNoInclineNoLaw) {
+  const Eigen::MatrixXd X = fitted_directions(), P = projector_out(X);
   const Eigen::VectorXd u = effect_sensitivity();
   const LawSize quadratic = [](const std::string& level) { return speed_law_size(level, 2); };
   RandomStream rng(23);
-  const FormCheck design = check_split(P * unit_noise(rng), X, u, incline_degree_labels(), kPoints, {}, quadratic);
-  ASSERT_GT(design.law_noncentrality, 0);
-  const double departure =
-      std::sqrt(min_detectable_noncentrality_f(design.dof, design.rest_dof, alpha, 0.6) / design.law_noncentrality);
-  Eigen::Vector3d sizes(speed_law_size("5", 2), speed_law_size("8", 2), speed_law_size("12", 2));
-  sizes /= sizes.mean();
-  EXPECT_NEAR(design.law_spread, sizes.maxCoeff() - sizes.minCoeff(), 1e-12);
-  sizes *= departure;
-  EXPECT_NEAR(design.law_noncentrality * departure * departure, (P * U * sizes).squaredNorm(), 1e-9);
-  const double power = f_test_power(design.law_noncentrality * departure * departure, design.dof, design.rest_dof, alpha);
-  EXPECT_NEAR(power, 0.6, 1e-6);
-  int flagged = 0;
-  const int draws = 4000;
-  for (int k = 0; k < draws; ++k)
-    flagged += check_split(P * (U * sizes + unit_noise(rng)), X, u, incline_degree_labels(), kPoints).p < alpha;
-  EXPECT_NEAR(static_cast<double>(flagged) / draws, power, 0.025);
   // A linear drag's own law asks one size everywhere: no spread, nothing for the check to see.
   const FormCheck linear = check_split(P * unit_noise(rng), X, u, incline_degree_labels(), kPoints, {},
                                        [](const std::string& level) { return speed_law_size(level, 1); });
@@ -280,6 +258,44 @@ TEST(FormCheck, ADragOfAnotherLawIsFlaggedAsOftenAsItsStatedPowerSays) {
   EXPECT_EQ(unread.dof, 2);
   EXPECT_TRUE(std::isnan(unread.law_spread));
   EXPECT_TRUE(std::isnan(unread.law_noncentrality));
+}
+
+TEST(FormCheck, TheLawsPowerHoldsForDataTheFitReadsAsOneSize) {
+  // The whole chain: data made by a quadratic drag's sizes k sqrt(sin theta) at every row (not yet
+  // projected), fitted by least squares on the offset and the effect, the fitted departure d read
+  // off, and the check on the residual. The law's power at the mean fitted departure is the share of
+  // 4000 draws the check flags (binomial sd <= 0.8 %). The effect's sensitivity differs between the
+  // levels (0.6, 1.05 and 1.5 per unit), so the fit's one size is a weighted mean of the sizes, not
+  // their plain mean: a noncentrality scaled by the plain mean would state another power.
+  const double alpha = 0.05;
+  const Eigen::MatrixXd X = fitted_directions(), U = split_by_incline();
+  const Eigen::VectorXd u = effect_sensitivity();
+  const LawSize quadratic = [](const std::string& level) { return speed_law_size(level, 2); };
+  const Eigen::Vector3d law(speed_law_size("5", 2), speed_law_size("8", 2), speed_law_size("12", 2));
+  RandomStream rng(31);
+  const FormCheck design = check_split(projector_out(X) * unit_noise(rng), X, u, incline_degree_labels(), kPoints, {},
+                                       quadratic);
+  ASSERT_GT(design.law_noncentrality, 0);
+  // k such that the check's power is near 0.6 (the fit's one size for k = 1 found by a first fit).
+  const auto fit = [&](const Eigen::VectorXd& y) { return Eigen::VectorXd(X.colPivHouseholderQr().solve(y)); };
+  const double one_size = fit(U * law)(1);
+  const double k = std::sqrt(min_detectable_noncentrality_f(design.dof, design.rest_dof, alpha, 0.6) /
+                             design.law_noncentrality) / one_size;
+  int flagged = 0;
+  double fitted_sum = 0;
+  const int draws = 4000;
+  for (int n = 0; n < draws; ++n) {
+    const Eigen::VectorXd y = U * (k * law) + unit_noise(rng);
+    const Eigen::VectorXd b = fit(y);
+    fitted_sum += b(1);
+    flagged += check_split(y - X * b, X, u, incline_degree_labels(), kPoints).p < alpha;
+  }
+  const double mean_fitted = fitted_sum / draws;
+  const double stated = f_test_power(design.law_noncentrality * mean_fitted * mean_fitted, design.dof, design.rest_dof, alpha);
+  EXPECT_NEAR(static_cast<double>(flagged) / draws, stated, 0.025) << "stated " << stated;
+  EXPECT_NEAR(stated, 0.6, 0.03);
+  // The spread the law asks, against the fit's one size.
+  EXPECT_NEAR(design.law_spread, (law.maxCoeff() - law.minCoeff()) / one_size, 1e-9);
 }
 
 TEST(FormCheck, ADragsLawIsDeterminedOnlyWhereACheckHadThePowerToTellIt) {
@@ -295,7 +311,19 @@ TEST(FormCheck, ADragsLawIsDeterminedOnlyWhereACheckHadThePowerToTellIt) {
   EXPECT_TRUE(std::isnan(lowest_law_power(checks, {"size_scatter"})));  // no law in the speed
   // A drag added where no check could ask (the design does not vary the incline): undetermined.
   EXPECT_EQ(lowest_law_power({}, {"linear_drag"}), 0.0);
-  checks[2].law_power = 0.5;
+  // Established: a check with the power, and no check that asked the law flagging it.
+  for (FormCheck& c : checks) c.p_adjusted = 0.5;
+  EXPECT_TRUE(laws_established(checks, {"linear_drag"}, 0.8, 0.05));
+  EXPECT_TRUE(laws_established(checks, {"size_scatter"}, 0.8, 0.05));  // nothing with a law in the speed
+  EXPECT_TRUE(laws_established({}, {}, 0.8, 0.05));
+  EXPECT_FALSE(laws_established({}, {"linear_drag"}, 0.8, 0.05));     // no check could ask
+  checks[1].p_adjusted = 0.01;  // a check that asked the law (power 0.6) flags: not established
+  EXPECT_FALSE(laws_established(checks, {"linear_drag"}, 0.8, 0.05));
+  checks[1].p_adjusted = 0.5;
+  checks[0].p_adjusted = 0.01;  // a flag along another column (no law asked) withholds nothing
+  EXPECT_TRUE(laws_established(checks, {"linear_drag"}, 0.8, 0.05));
+  checks[2].law_power = 0.5;    // no check with the power
+  EXPECT_FALSE(laws_established(checks, {"linear_drag"}, 0.8, 0.05));
   EXPECT_NEAR(lowest_law_power(checks, {"size_scatter", "linear_drag"}), 0.6, 1e-12);
 }
 
@@ -337,7 +365,7 @@ TEST(FinalVerdict, ADragWhoseLawTheDesignCannotTellIsSaidAfterTheFailedTests) {
   EXPECT_EQ(final_verdict(e), "effect found; the held-out points are still beyond the noise");
   e.held_out_fresh_p = 0.3;
   EXPECT_EQ(final_verdict(e),
-            "effect found; this design does not determine the drag's law in the speed: a drag of another law may be acting");
+            "effect found; the drag's law in the speed is not established: a drag of another law may be acting");
   e.law_undetermined = false;
   EXPECT_EQ(final_verdict(e), "effect found");
 }
