@@ -118,7 +118,7 @@ void write_law_md(std::ostream& o, const CalibrationResult& r) {
   o << "\n## The added drag's law in the speed\n\n"
     << (!r.law_undetermined
             ? "Established as linear: the check along the incline had " + power + " and did not flag it.\n"
-        : r.law_power < 0.8
+        : r.law_power < FormCheckDef{}.power  // the loop's (calibration.cpp: the form checks' default)
             ? "Not established: this design cannot tell it (" + power + "; 0: no check along the incline could be "
               "made). A drag of another law may be acting, and the size is that of the linear drag that mimics it here.\n"
             : "Not established: the check along the incline, with " + power + ", flags the drag's size as changing "

@@ -79,7 +79,8 @@ std::string final_verdict(const VerdictEvidence& e) {
   }
   if (poor_fit(e)) return "effect found, poor fit remains";
   if (held_beyond) return "effect found; the held-out points are still beyond the noise";
-  // Not a failed test but a missing one: the design could not have told the drag's law from another.
+  // Not a failed test: a claim withheld (the design could not tell the drag's law from another, or
+  // the check that could flags it; its flags are out of the verdict, rule 3).
   return e.law_undetermined
              ? "effect found; the drag's law in the speed is not established: a drag of another law may be acting"
              : "effect found";

@@ -41,6 +41,7 @@ if [[ -v ONLY ]]; then
   read -r -d '' -a only <<< "$ONLY" || true
   ((${#only[@]} > 0)) || { echo "error: ONLY is set but names no twin" >&2; exit 2; }
   for id in "${only[@]}"; do
+    [[ $id != */* ]] || { echo "error: ONLY names '$id'; allowed: twin names (no '/')" >&2; exit 2; }
     [[ -f $pass/twins/$id.toml ]] || { echo "error: ONLY names '$id'; $pass/twins has no $id.toml" >&2; exit 2; }
   done
 fi

@@ -227,10 +227,11 @@ set +e
 ONLY="null-2 nothing-9" replay "$work/cut" replay-only 1; rc_only=$?
 grep -q "ONLY names 'nothing-9'" "$work/stderr"; said_only=$?
 ONLY=" " replay "$work/cut" replay-blank 1; rc_blank=$?
+ONLY="../twins/null-2" replay "$work/cut" replay-path 1; rc_path=$?
 set -e
 [[ $rc_only == 2 && $said_only == 0 ]] || fail "an unknown ONLY name: exit $rc_only"
-[[ $rc_blank == 2 && ! -e $work/cut/replay-only && ! -e $work/cut/replay-blank ]] ||
-  fail "a refused ONLY wrote its folder, or a blank ONLY was not refused (exit $rc_blank)"
+[[ $rc_blank == 2 && $rc_path == 2 && ! -e $work/cut/replay-only && ! -e $work/cut/replay-blank && ! -e $work/cut/replay-path ]] ||
+  fail "a refused ONLY wrote its folder, or a blank ONLY or a path was not refused (exit $rc_blank, $rc_path)"
 carry() { "$src/studies/blind_pass_carry.sh" "$@" > "$work/stdout" 2> "$work/stderr"; }
 carry save "$work/cut" "$work/carry" || fail "saving a cut-off pass: $(cat "$work/stderr")"
 [[ -z $(find "$work/carry" -name '*.sqlite*') ]] || fail "a store was carried"
