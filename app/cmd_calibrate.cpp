@@ -24,6 +24,7 @@ struct CalibrateCommands::Options {
   bool no_plots = false, mpi = false, check = false;
   int max_effects = 2;
   int contenders = CalibrationDef{}.contenders;
+  int alternatives = CalibrationDef{}.alternatives;
   int model_replicates = 0;  // 0: the data file's [model] replicates
   double decisive_score_p = CalibrationDef{}.decisive_score_p;
   bool held_out_route = CalibrationDef{}.held_out_route;
@@ -80,6 +81,7 @@ int cmd_calibrate(const CalibrateCommands::Options& o) {
   def.model = parse_model_kind(o.model);
   def.max_effects = o.max_effects;
   def.contenders = o.contenders;
+  def.alternatives = o.alternatives;
   def.decisive_score_p = o.decisive_score_p;
   def.held_out_route = o.held_out_route;
   def.independent_signatures = o.independent_signatures;
@@ -161,6 +163,11 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
                           "Significant candidates fitted in full before one is tried, the lowest BIC (default 1: the "
                           "best score is tried; blind passes 11-12 identified as many with 1 as with 3)")
       ->check(CLI::Range(1, 10));
+  o.calibrate->add_option("--alternatives", o.alternatives,
+                          "Other significant candidates fitted in full beside the one tried: any that alone leaves the "
+                          "fitted points within the noise is an alternative these data do not exclude, and the verdict "
+                          "says so (default 0: none; rule 5 of calibrate/decisions.hpp)")
+      ->check(CLI::Range(0, 9));
   o.calibrate->add_option("--decisive-score", o.decisive_score_p,
                           "Adjusted p below which the best candidate is tried even where the fitted chi2 is within "
                           "the noise (default 0: never; rule 1 of calibrate/decisions.hpp)")

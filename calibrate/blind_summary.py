@@ -64,6 +64,19 @@ def said(summary):
     return label, added
 
 
+def alternatives_text(summary):
+    """Rule 5's alternatives per added effect, ';' apart ("none": asked, none named; nothing added: "none");
+    "" where the calibration did not ask (--alternatives 0, or a summary made before the option)."""
+    if summary.get("alternatives", 0) <= 0:
+        return ""
+    return "; ".join(",".join(a.get("alternatives", [])) or "none" for a in summary["effects"]) or "none"
+
+
+def named_alternatives(row):
+    """Whether the row's calibration named an alternative to any added effect."""
+    return any(x not in ("", "none") for x in row["alternatives"].split("; "))
+
+
 def contests(summary):
     """Rounds whose significant candidates were fitted in full (decisions.hpp rule 4, from dc3e474 on):
     (the best score's effect, the effect tried) per such round."""
@@ -154,6 +167,9 @@ def main(out):
             "form_differs": summary.get("form_differs", ""),
             # The drag's law in the speed not determined by the design (form_check.hpp); absent before it.
             "law_undetermined": summary.get("law_undetermined", ""),
+            # Alternatives these data do not exclude in place of an added effect (decisions.hpp rule 5, with
+            # --alternatives): "" where the calibration did not ask, else the added effects' lists, ';' apart.
+            "alternatives": alternatives_text(summary),
             "below_best_case_bound": ("unseen" if unseen_step else all(below) if below and None not in below else "")
                                      if bounds else "",
             "signal_chi2": signal["chi2"] if signal else "",
@@ -292,7 +308,7 @@ def main(out):
         f"* null twins where an effect was added: {pct(fp, len(nulls))}; called \"unexplained\" (nothing added): "
         f"{pct(null_unexplained, len(nulls))}",
         f"* outside-the-catalogue twins: "
-        f"{', '.join(r['said'] + (' (form check: size differs)' if r['form_differs'] is True else '') + (' (law in the speed not determined)' if r['law_undetermined'] is True else '') for r in outside) or 'none'}",
+        f"{', '.join(r['said'] + (' (form check: size differs)' if r['form_differs'] is True else '') + (' (law in the speed not determined)' if r['law_undetermined'] is True else '') + (' (not excluded in its place: ' + r['alternatives'] + ')' if named_alternatives(r) else '') for r in outside) or 'none'}",
         f"* two-effect twins: {', '.join(r['case'] + ' -> ' + r['said'] for r in two) or 'none'}",
         f"* 95 % intervals of recovered sizes that contain the planted value: {pct(covered, intervals)}",
         f"* where an effect was planted and found, held-out RMSE (fresh seeds; fit scale, mixing observables' units) at "
@@ -341,6 +357,18 @@ def main(out):
             f"(false alarms for a catalogue effect; still counted as identified): {pct(len(false_alarms), len(tried_rows))}"
             + (f" ({', '.join(false_alarms)})" if false_alarms else ""),
             f"* other calibrations the form check flags: {', '.join(other_flagged) or 'none'}",
+        ]
+    if any(r["alternatives"] for r in rows):
+        # Rule 5: an effect found whose identity the verdict withholds is still counted as identified above
+        # (the effect tried is the loop's answer); here, how often the answer came with that reservation.
+        with_alt = [r for r in found_rows if named_alternatives(r)]
+        wrong = [r for r in single if r["identified"] is False and named_alternatives(r)]
+        lines += [
+            f"* planted effects found whose verdict says these data do not exclude another effect in its place "
+            f"(alternatives, rule 5; still counted as identified): {pct(len(with_alt), len(found_rows))}"
+            + (f" ({', '.join(r['case'] + ': ' + r['alternatives'] for r in with_alt)})" if with_alt else ""),
+            f"* single planted effects not identified, with alternatives named: "
+            f"{', '.join(r['case'] + ' (' + r['said'] + '; not excluded: ' + r['alternatives'] + ')' for r in wrong) or 'none'}",
         ]
     if flagged_known:
         lines += [

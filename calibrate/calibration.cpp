@@ -260,40 +260,68 @@ class Loop {
 
   // Which candidate the round tries (decisions.hpp, rule 4): with one significant candidate,
   // the best score; with more, each fitted in full and the lowest BIC. Sets round.best, .fits
-  // and .rivals accordingly; returns the chosen one's fitted trial (not yet judged).
+  // and .rivals accordingly; returns the chosen one's fitted trial (not yet judged). With
+  // alternatives asked for (rule 5), the other significant candidates are fitted too, and
+  // round.alternatives names those that alone leave the fitted points within the noise.
   Trial contest(Round& round, const std::vector<EffectTerm>& terms, const Reference& ref, const Surface& surface,
                 const ModelState& state) {
     std::vector<const Candidate*> visible;
     std::vector<double> score, p_adjusted;
     for (const Candidate& c : round.candidates)
       if (c.visible) visible.push_back(&c), score.push_back(c.score.statistic), p_adjusted.push_back(c.p_adjusted);
-    const std::vector<int> picks = contenders(score, p_adjusted, def_.alpha, def_.contenders);
-    if (picks.size() < 2) return fit_trial(*find(round, round.best), terms, ref, surface, state);
+    const int compared = std::max(def_.contenders, 1);  // rule 4 chooses among the first this many
+    const int asked = def_.alternatives > 0 ? std::max(compared, 1 + def_.alternatives) : compared;
+    std::vector<int> picks = contenders(score, p_adjusted, def_.alpha, asked);
+    const auto best_pick = std::find_if(picks.begin(), picks.end(),
+                                        [&](int m) { return visible[static_cast<std::size_t>(m)]->effect == round.best; });
+    if (best_pick == picks.end() || picks.size() < 2)  // the best not significant: a route of rule 1's options
+      return fit_trial(*find(round, round.best), terms, ref, surface, state);
+    std::rotate(picks.begin(), best_pick, best_pick + 1);  // the best score first (equal scores: the round's best)
     std::vector<Trial> trials;
-    std::vector<double> bic;
+    std::vector<double> bic, fitted_p;
     std::vector<bool> eligible;
     for (int m : picks) {
       const Candidate& c = *visible[static_cast<std::size_t>(m)];
       trials.push_back(fit_trial(c, terms, ref, surface, state));
       bic.push_back(trials.back().after.bic);
+      fitted_p.push_back(trials.back().after.fitted.chi.p);
       eligible.push_back(!at_neutral(trials.back(), c));
-      round.fits.push_back({c.effect, trials.back().fit.params.get(c.key, c.neutral), bic.back(), !eligible.back()});
+      round.fits.push_back({c.effect, trials.back().fit.params.get(c.key, c.neutral), bic.back(), !eligible.back(),
+                            trials.back().after.fitted.chi});
     }
-    const FitChoice choice = choose_by_fit(bic, eligible, chi_square_quantile(1 - def_.alpha, 1));
-    std::vector<std::string> rivals;
-    for (int r : choice.rivals) rivals.push_back(round.fits[static_cast<std::size_t>(r)].effect);
-    for (const std::string& name : round.rivals)  // the score's rivals the fits did not reach
-      if (std::none_of(round.fits.begin(), round.fits.end(), [&](const ContenderFit& f) { return f.effect == name; }))
-        rivals.push_back(name);
-    round.rivals = rivals;
-    round.best = round.fits[static_cast<std::size_t>(choice.winner)].effect;
+    int tried = 0;  // the best score, unless rule 4 compares fits
+    if (compared >= 2) {
+      const std::size_t n = std::min(picks.size(), static_cast<std::size_t>(compared));
+      const FitChoice choice = choose_by_fit(std::vector<double>(bic.begin(), bic.begin() + n),
+                                             std::vector<bool>(eligible.begin(), eligible.begin() + n),
+                                             chi_square_quantile(1 - def_.alpha, 1));
+      std::vector<std::string> rivals;
+      for (int r : choice.rivals) rivals.push_back(round.fits[static_cast<std::size_t>(r)].effect);
+      for (const std::string& name : round.rivals)  // the score's rivals the fits did not reach
+        if (std::none_of(round.fits.begin(), round.fits.begin() + n,
+                         [&](const ContenderFit& f) { return f.effect == name; }))
+          rivals.push_back(name);
+      round.rivals = rivals;
+      tried = choice.winner;
+      round.best = round.fits[static_cast<std::size_t>(tried)].effect;
+    }
+    if (def_.alternatives > 0)
+      for (int a : alternatives_not_excluded(fitted_p, eligible, tried, def_.alpha))
+        round.alternatives.push_back(round.fits[static_cast<std::size_t>(a)].effect);
     std::vector<std::string> listed;
     for (const ContenderFit& f : round.fits)
-      listed.push_back(fmt::format("{} {:.4g} (BIC {:.1f}{})", f.effect, f.value, f.bic, f.at_neutral ? ", at neutral" : ""));
+      listed.push_back(fmt::format("{} {:.4g} (BIC {:.1f}, fitted chi2 p {:.3g}{})", f.effect, f.value, f.bic,
+                                   f.fitted.p, f.at_neutral ? ", at neutral" : ""));
     const auto significant = std::count_if(p_adjusted.begin(), p_adjusted.end(), [&](double p) { return p < def_.alpha; });
-    say(fmt::format("{} candidates significant, {} fitted in full: {}; tried: {}", significant, picks.size(),
-                    fmt::join(listed, ", "), round.best));
-    return std::move(trials[static_cast<std::size_t>(choice.winner)]);
+    std::string line = fmt::format("{} candidates significant, {} fitted in full: {}; tried: {}", significant,
+                                   picks.size(), fmt::join(listed, ", "), round.best);
+    if (def_.alternatives > 0)
+      line += round.alternatives.empty()
+                  ? "; no other leaves the fitted points within the noise alone"
+                  : fmt::format("; not excluded in its place (alone, the fitted points within the noise): {}",
+                                fmt::join(round.alternatives, ", "));
+    say(line);
+    return std::move(trials[static_cast<std::size_t>(tried)]);
   }
 
   // fit_trial, then judge.
@@ -435,20 +463,23 @@ class Loop {
     out_.rounds.push_back(std::move(round));
     Round& first_round = out_.rounds[out_.rounds.size() - 2];
     first_round.decision += fmt::format("; kept as a pair with {} (next round)", second.effect);
-    accept_as(first, group_of(first_round, first), two.fit.params, one.fit.interval, cands);
+    accept_as(first, first_round, two.fit.params, one.fit.interval, cands);
     accept(second, two, cands);
     surface = two.surface, state = two.after;
     return true;
   }
 
   void accept(const Candidate& c, const Trial& t, std::vector<Candidate>& cands) {
-    accept_as(c, group_of(out_.rounds.back(), c), t.fit.params, t.fit.interval, cands);
+    accept_as(c, out_.rounds.back(), t.fit.params, t.fit.interval, cands);
   }
 
-  void accept_as(const Candidate& c, std::vector<std::string> group, const ParameterSet& fitted,
-                 const ProfileInterval& interval, std::vector<Candidate>& cands) {
-    out_.effects.push_back({c.effect, c.key, std::move(group), c.neutral, fitted.get(c.key, c.neutral), interval.lo,
-                            interval.hi, interval.bounded_lo && interval.bounded_hi});
+  // `round`: the one `c` was tried in (its group and alternatives).
+  void accept_as(const Candidate& c, const Round& round, const ParameterSet& fitted, const ProfileInterval& interval,
+                 std::vector<Candidate>& cands) {
+    out_.effects.push_back({c.effect, c.key, group_of(round, c),
+                            c.effect == round.best ? round.alternatives : std::vector<std::string>{}, c.neutral,
+                            fitted.get(c.key, c.neutral), interval.lo, interval.hi,
+                            interval.bounded_lo && interval.bounded_hi});
     cands.erase(std::remove_if(cands.begin(), cands.end(), [&](const Candidate& x) { return x.effect == c.effect; }),
                 cands.end());
   }
@@ -595,12 +626,15 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
                                  .held_out_n = out.after.held_out_fresh.n,
                                  .held_out_fresh_p = out.held_out_fresh_fit_aware.p,
                                  .alpha = def.alpha,
-                                 .law_undetermined = out.law_undetermined};
+                                 .law_undetermined = out.law_undetermined,
+                                 .alternatives = std::any_of(out.effects.begin(), out.effects.end(),
+                                                             [](const AddedEffect& e) { return !e.alternatives.empty(); })};
   out.poor_fit = poor_fit(evidence);
   out.held_out_beyond_noise = held_out_beyond_noise(evidence);
   out.verdict = final_verdict(evidence);
   out.alpha = def.alpha;
   out.contenders = def.contenders;
+  out.alternatives = def.alternatives;
   out.decisive_score_p = def.decisive_score_p;
   out.held_out_route = def.held_out_route;
   out.independent_signatures = def.independent_signatures;

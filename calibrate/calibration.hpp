@@ -52,6 +52,8 @@ struct CalibrationDef {
   int max_effects = 2;             // rounds of "add an effect"
   int contenders = 1;              // significant candidates fitted in full before one is tried (decisions.hpp, rule 4);
                                    // 1: the best score (blind passes 11-12: 28 of 36 identified with 1 and with 3)
+  int alternatives = 0;            // other significant candidates fitted in full to see whether they too, alone, leave
+                                   // the fitted points within the noise (decisions.hpp, rule 5; 0: none)
   double decisive_score_p = 0;     // a best score with adjusted p below this is tried even where the fitted chi^2 is
                                    // within the noise (decisions.hpp, rule 1's option; 0: never)
   bool held_out_route = false;     // a round also looks for an effect where the fitted points are within the noise but
@@ -114,17 +116,22 @@ struct Candidate {
   int group = -1;              // index into the round's groups
 };
 
-// A contender of a round fitted in full on its measured response (decisions.hpp, rule 4).
+// A candidate of a round fitted in full on its measured response: a contender (decisions.hpp, rule 4)
+// or an alternative to the one tried (rule 5).
 struct ContenderFit {
   std::string effect;
   double value = 0;  // fitted size (key units)
   double bic = 0;    // of the state with it (same number of parameters for every contender)
   bool at_neutral = false;  // fitted at its neutral value: not eligible (decisions.hpp, choose_by_fit)
+  ChiSquare fitted;  // the fitted points' chi^2 with it (the measured free parameters included)
 };
 
 struct Round {
   std::vector<Candidate> candidates;
-  std::vector<ContenderFit> fits;  // empty when at most one candidate was significant
+  std::vector<ContenderFit> fits;  // empty when at most one candidate was significant (or neither contenders nor
+                                   // alternatives are asked for)
+  std::vector<std::string> alternatives;  // fits besides the one tried that leave the fitted points within the noise
+                                          // alone (decisions.hpp, rule 5): these data do not exclude them in its place
   std::vector<std::vector<std::string>> groups;  // effects the design cannot tell apart (size > 1 only)
   std::vector<std::string> rivals;  // visible candidates whose score is within chi2_1(1 - alpha) of the best:
                                     // a 95 % confidence set of "which effect"; these data cannot rank them.
@@ -138,6 +145,7 @@ struct Round {
 struct AddedEffect {
   std::string effect, key;
   std::vector<std::string> group;  // the indistinguishable group it stands for (itself if alone)
+  std::vector<std::string> alternatives;  // effects these data do not exclude in its place (Round::alternatives)
   double neutral = 0, value = 0;   // key units
   double lo95 = 0, hi95 = 0;       // profile interval of value
   bool interval_bounded = true;
@@ -153,6 +161,7 @@ struct CalibrationResult {
   std::string summary;             // one paragraph for people
   double alpha = 0.05;             // the level the loop's tests used (CalibrationDef::alpha)
   int contenders = 1;              // CalibrationDef::contenders it ran with
+  int alternatives = 0;            // CalibrationDef::alternatives it ran with
   double decisive_score_p = 0;     // CalibrationDef::decisive_score_p it ran with
   bool held_out_route = false;     // CalibrationDef::held_out_route it ran with
   bool independent_signatures = false;  // CalibrationDef::independent_signatures it ran with

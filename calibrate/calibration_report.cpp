@@ -144,6 +144,7 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                    data.model_replicates, json_number(r.model_noise_share), json_number(r.surface_noise_ratio),
                    json_number(r.node_correlation));
   o << fmt::format("  \"contenders\": {},\n", r.contenders);
+  o << fmt::format("  \"alternatives\": {},\n", r.alternatives);
   o << fmt::format("  \"decisive_score_p\": {},\n", r.decisive_score_p);
   o << fmt::format("  \"held_out_route\": {},\n", r.held_out_route ? "true" : "false");
   o << fmt::format("  \"independent_signatures\": {},\n", r.independent_signatures ? "true" : "false");
@@ -155,8 +156,9 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
   o << "  \"effects\": [";
   for (std::size_t i = 0; i < r.effects.size(); ++i) {
     const AddedEffect& e = r.effects[i];
-    o << fmt::format(R"({}{{"effect": {}, "key": {}, "group": {}, "neutral": {}, "value": {}, "lo95": {}, "hi95": {}, "interval_bounded": {}}})",
-                     i ? ", " : "", json_string(e.effect), json_string(e.key), json_list(e.group), json_number(e.neutral),
+    o << fmt::format(R"({}{{"effect": {}, "key": {}, "group": {}, "alternatives": {}, "neutral": {}, "value": {}, "lo95": {}, "hi95": {}, "interval_bounded": {}}})",
+                     i ? ", " : "", json_string(e.effect), json_string(e.key), json_list(e.group),
+                     json_list(e.alternatives), json_number(e.neutral),
                      json_number(e.value), json_number(e.lo95), json_number(e.hi95), e.interval_bounded ? "true" : "false");
   }
   o << "],\n";
@@ -181,11 +183,14 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
     for (const auto& g : rd.groups) groups += (groups.empty() ? "" : ", ") + json_list(g);
     std::string fits;
     for (const ContenderFit& f : rd.fits)
-      fits += fmt::format(R"({}{{"effect": {}, "value": {}, "bic": {}, "at_neutral": {}}})", fits.empty() ? "" : ", ",
-                          json_string(f.effect), json_number(f.value), json_number(f.bic), f.at_neutral ? "true" : "false");
+      fits += fmt::format(R"({}{{"effect": {}, "value": {}, "bic": {}, "at_neutral": {}, "fitted_chi2": {}, "fitted_dof": {}, "fitted_p": {}}})",
+                          fits.empty() ? "" : ", ", json_string(f.effect), json_number(f.value), json_number(f.bic),
+                          f.at_neutral ? "true" : "false", json_number(f.fitted.chi2), f.fitted.dof,
+                          json_number(f.fitted.p));
     o << fmt::format("{}\n    {{\"best\": {}, \"decision\": {}, \"groups\": [{}], \"rivals\": {}, \"fits\": [{}], "
-                     "\"candidates\": [",
-                     i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals), fits);
+                     "\"alternatives\": {}, \"candidates\": [",
+                     i ? "," : "", json_string(rd.best), json_string(rd.decision), groups, json_list(rd.rivals), fits,
+                     json_list(rd.alternatives));
     for (std::size_t c = 0; c < rd.candidates.size(); ++c) {
       const Candidate& k = rd.candidates[c];
       o << fmt::format(R"({}{{"effect": {}, "step": {}, "other_step": {}, "other_visibility_p": {}, "visible": {}, "visibility_p": {}, "signature_chi2": {}, "signature_points": {}, "score": {}, "p": {}, "p_adjusted": {}, "estimate": {}, "left_by_fit": {}, "direction_possible": {}, "group": {}}})",
@@ -271,6 +276,10 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                      e.value, d ? d->unit : "", e.lo95, e.hi95,
                      e.interval_bounded ? "" : ", cut at the end of the range the fit may move it in", e.neutral,
                      e.group.size() > 1 ? fmt::format(", standing for the group {{{}}} that this design cannot tell apart", fmt::join(e.group, ", ")) : "");
+    if (!e.alternatives.empty())
+      o << fmt::format(" These data do not exclude {} in its place: fitted alone instead of it, {} the fitted points "
+                       "within the noise too (chi2 p >= {:.2g}; section \"Candidate effects\").",
+                       fmt::join(e.alternatives, ", "), e.alternatives.size() > 1 ? "each leaves" : "it leaves", r.alpha);
   }
   // An attribution is a choice among the catalogue's effects: one outside it that changes these
   // observables the same way can pass every test as the catalogue effect it resembles (blind pass
@@ -346,11 +355,24 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                        c.group >= 0 ? std::to_string(c.group) : "");
     for (const auto& g : rd.groups) o << fmt::format("\nIndistinguishable in this design (|cos| > 0.9): {}.\n", fmt::join(g, ", "));
     if (!rd.fits.empty()) {
-      o << "\nSignificant candidates fitted in full, each on its measured response with the free parameters (the "
-           "score ranks them by a linear view at the round's start; the lowest BIC is the one tried, a fit at its "
-           "effect's neutral value never):\n\n| effect | fitted size | BIC | at neutral |\n|---|---|---|---|\n";
+      o << "\nSignificant candidates fitted in full, each on its measured response with the free parameters ("
+        << (r.contenders >= 2
+                ? "the score ranks them by a linear view at the round's start; among the first " +
+                      std::to_string(r.contenders) + ", the lowest BIC is the one tried, a fit at its effect's neutral "
+                      "value never"
+                : "the best score is the one tried")
+        << (r.alternatives > 0 ? "; any other whose fit, alone, leaves the fitted points within the noise (chi2 p >= "
+                                 "alpha) is an alternative these data do not exclude in its place"
+                               : "")
+        << "):\n\n| effect | fitted size | BIC | fitted chi2 / nu (p) | at neutral |\n|---|---|---|---|---|\n";
       for (const ContenderFit& f : rd.fits)
-        o << fmt::format("| {} | {:.4g} | {:.1f} | {} |\n", f.effect, f.value, f.bic, f.at_neutral ? "yes" : "");
+        o << fmt::format("| {} | {:.4g} | {:.1f} | {:.2f} / {} ({:.3g}) | {} |\n", f.effect, f.value, f.bic,
+                         f.fitted.chi2, f.fitted.dof, f.fitted.p, f.at_neutral ? "yes" : "");
+      if (r.alternatives > 0)
+        o << (rd.alternatives.empty()
+                  ? std::string("\nNo other leaves the fitted points within the noise alone.\n")
+                  : fmt::format("\nNot excluded in place of {} (alone, the fitted points within the noise): {}.\n",
+                                rd.best, fmt::join(rd.alternatives, ", ")));
     }
     if (rd.rivals.size() > 1)
       o << fmt::format(fmt::runtime(rd.fits.empty() ? "\nThese data cannot rank them below the best (score within chi2_1(0.95) = "

@@ -45,6 +45,14 @@ std::vector<int> contenders(const std::vector<double>& score, const std::vector<
   return out;
 }
 
+std::vector<int> alternatives_not_excluded(const std::vector<double>& fitted_p, const std::vector<bool>& eligible,
+                                           int tried, double alpha) {
+  std::vector<int> out;
+  for (std::size_t i = 0; i < fitted_p.size(); ++i)
+    if (static_cast<int>(i) != tried && eligible[i] && fitted_p[i] >= alpha) out.push_back(static_cast<int>(i));
+  return out;
+}
+
 FitChoice choose_by_fit(const std::vector<double>& bic, const std::vector<bool>& eligible, double delta) {
   FitChoice c;
   const bool any = std::find(eligible.begin(), eligible.end(), true) != eligible.end();
@@ -79,6 +87,8 @@ std::string final_verdict(const VerdictEvidence& e) {
   }
   if (poor_fit(e)) return "effect found, poor fit remains";
   if (held_beyond) return "effect found; the held-out points are still beyond the noise";
+  // Before the law: which effect acts comes before how it depends on the speed.
+  if (e.alternatives) return "effect found; these data do not exclude another effect in its place";
   // Not a failed test: a claim withheld (the design could not tell the drag's law from another, or
   // the check that could flags it; its flags are out of the verdict, rule 3).
   return e.law_undetermined

@@ -76,6 +76,22 @@
 //    effect exactly when it did before (rule 1), and the chosen one meets rule 2. Not the
 //    default (CalibrationDef::contenders = 1): over blind passes 11 and 12 it identified no
 //    more effects (28 of 36 either way) for about 1.2-1.3 x the CPU.
+// 5. Whether these data exclude another effect in place of the one added (alternatives; option
+//    CalibrationDef::alternatives, off by default until a replay of blind pass 23 scores it:
+//    results/calibration-blind-pass23/ALTERNATIVES_PREREGISTRATION.md). Rules 1-4 rank the
+//    candidates against each other; none asks whether a rival, alone, would explain the data as
+//    well in absolute terms. Where the residual is only a little beyond the noise, several can: an
+//    effect outside the catalogue (blind pass 22's 4 /m quadratic drag) was added as size scatter
+//    with "effect found", while rolling resistance and linear drag had significant scores too. The
+//    other significant candidates (up to `alternatives` of them, best scores first) are fitted in
+//    full like the one tried, and those whose fit leaves the fitted points within the noise (chi^2
+//    p >= alpha: rule 1's own test, the one that ends the search) are alternatives these data do not
+//    exclude. The verdict then withholds the identity: "effect found; these data do not exclude
+//    another effect in its place". Not a choice: the effect tried, its size and whether it is kept
+//    are those of rules 1-4. As a confidence set: where the truth is a catalogue effect fitted so, it
+//    passes that test with probability about 1 - alpha; an effect not fitted (not significant, or
+//    beyond `alternatives`) is not asked. Only the fitted points: the alternatives are not put to
+//    the held-out keep test (rule 2), which would cost their runs again.
 #pragma once
 
 #include <string>
@@ -123,6 +139,12 @@ Keep keep_verdict(const KeepEvidence& e, double decisive_bic);
 std::vector<int> contenders(const std::vector<double>& score, const std::vector<double>& p_adjusted, double alpha,
                             int max);
 
+// Rule 5: the fits (indices into `fitted_p`) these data do not exclude in place of fit `tried`:
+// eligible (not at neutral) and leaving the fitted points within the noise (chi^2 p >= alpha);
+// `tried` itself never, an index out of range (-1: none tried) excludes nothing. In the fits' order.
+std::vector<int> alternatives_not_excluded(const std::vector<double>& fitted_p, const std::vector<bool>& eligible,
+                                           int tried, double alpha);
+
 // Rule 4's choice among the contenders' full fits: the lowest BIC among the eligible ones wins
 // (the first of equal ones); its rivals are the eligible ones within `delta` of it (itself
 // included), the fits these data cannot rank below it at that level (delta = chi2_1(1 - alpha),
@@ -146,14 +168,16 @@ struct VerdictEvidence {
   double poor_fit_p = 0.01;         // fitted chi^2 p below which a fit with effects is flagged poor
   bool law_undetermined = false;    // an added drag whose law in the speed is not established (form_check.hpp,
                                     // laws_established: power below 0.8 against another law, or its check flags)
+  bool alternatives = false;        // an added effect with alternatives these data do not exclude (rule 5)
 };
 
 bool held_out_beyond_noise(const VerdictEvidence& e);
 bool poor_fit(const VerdictEvidence& e);  // the fitted points after everything
 // "consistent with noise" | "unexplained residual" | "unexplained residual: the held-out points are
 // beyond the noise" | "effect found" | "effect found, poor fit remains" | "effect found; the held-out
-// points are still beyond the noise" | "effect found; the drag's law in the speed is not established: a
-// drag of another law may be acting" | "residual not attributed (--max-effects 0)" | ...
+// points are still beyond the noise" | "effect found; these data do not exclude another effect in its
+// place" | "effect found; the drag's law in the speed is not established: a drag of another law may be
+// acting" | "residual not attributed (--max-effects 0)" | ...
 std::string final_verdict(const VerdictEvidence& e);
 
 }  // namespace gapflow

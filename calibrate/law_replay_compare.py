@@ -21,15 +21,20 @@ RUN_FIELDS = {"run_seconds", "wall_seconds", "runs_simulated", "runs_reused", "d
 DRAG = "linear_drag"
 
 
-def other_differences(before, after):
-    """The summary.json fields that differ beyond the verdict, the law's fields and the run fields."""
+def without(items, fields):
+    """A list of objects with `fields` left out of each."""
+    return [{k: v for k, v in x.items() if k not in fields} for x in items]
+
+
+def other_differences(before, after, allowed=LAW_FIELDS, allowed_in={"form_checks": CHECK_LAW_FIELDS}):
+    """The summary.json fields that differ beyond the verdict, the run fields and `allowed`; a list field
+    named in `allowed_in` differs only beyond the fields listed for its objects."""
     out = []
     for key in sorted(set(before) | set(after)):
-        if key in LAW_FIELDS | RUN_FIELDS | {"verdict"}:
+        if key in allowed | RUN_FIELDS | {"verdict"}:
             continue
-        if key == "form_checks":
-            strip = lambda checks: [{k: v for k, v in c.items() if k not in CHECK_LAW_FIELDS} for c in checks]
-            if strip(before.get(key, [])) != strip(after.get(key, [])):
+        if key in allowed_in:
+            if without(before.get(key, []), allowed_in[key]) != without(after.get(key, []), allowed_in[key]):
                 out.append(key)
         elif before.get(key) != after.get(key):
             out.append(key)
@@ -53,9 +58,12 @@ def describe(case, before, after):
             f"{'-' if law is None else f'{law:.3f}'}, undetermined {after.get('law_undetermined')}; {checks}")
 
 
-def main(argv):
+def main(argv, differences=other_differences, allowed=verdict_change_allowed, line=describe, what="the law",
+         not_allowed="the verdict changed where no linear drag was found", doc=__doc__):
+    """Compares BEFORE and AFTER case by case (argv: BEFORE AFTER [CASE ...]); the other arguments say
+    what the change under test may alter (alternatives_replay_compare.py passes its own)."""
     if len(argv) < 2:
-        sys.exit(__doc__)
+        sys.exit(doc)
     before_dir, after_dir = Path(argv[0]), Path(argv[1])
     cases = argv[2:] or sorted(p.parent.name for p in after_dir.glob("*/summary.json")
                                if (before_dir / p.parent.name / "summary.json").is_file())
@@ -70,12 +78,12 @@ def main(argv):
             print(f"error: {', '.join(missing)} missing", file=sys.stderr)
             sys.exit(2)
         before, after = (json.loads(p.read_text()) for p in paths)
-        print(describe(case, before, after))
-        other = other_differences(before, after)
-        if other or not verdict_change_allowed(before, after):
+        print(line(case, before, after))
+        other = differences(before, after)
+        if other or not allowed(before, after):
             bad.append(case)
-            print(f"  DIFFERS: {', '.join(other) or 'the verdict changed where no linear drag was found'}")
-    print(f"cases compared: {len(cases)}; with differences beyond the law: {len(bad)}"
+            print(f"  DIFFERS: {', '.join(other) or not_allowed}")
+    print(f"cases compared: {len(cases)}; with differences beyond {what}: {len(bad)}"
           f"{' (' + ', '.join(bad) + ')' if bad else ''}")
     return 1 if bad else 0
 

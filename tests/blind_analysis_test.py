@@ -492,5 +492,100 @@ class LawReplayCompare(unittest.TestCase):
             self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
 
 
+class AlternativesReplayCompare(unittest.TestCase):
+    """calibrate/alternatives_replay_compare.py: rule 5 may add fits and alternatives and qualify the verdict."""
+
+    QUALIFIED = "effect found; these data do not exclude another effect in its place"
+
+    def write(self, folder, case, verdict, effect, alternatives=None, fits=(), extra=None):
+        d = Path(folder) / case
+        d.mkdir(parents=True)
+        e = {"effect": effect, "value": 0.08}
+        rd = {"best": effect, "decision": "added", "fits": list(fits)}
+        if alternatives is not None:
+            e["alternatives"] = alternatives
+            rd["alternatives"] = alternatives
+        s = {"verdict": verdict, "effects": [e], "rounds": [rd], "chi2": 1.0, "run_seconds": 5}
+        if alternatives is not None:
+            s["alternatives"] = 2
+        s.update(extra or {})
+        (d / "summary.json").write_text(json.dumps(s))
+
+    def test_rule_5_alone_passes_and_anything_else_is_named(self):
+        fits = [{"effect": "size_scatter", "fitted_p": 0.6}, {"effect": "rolling_resistance", "fitted_p": 0.3}]
+        with tempfile.TemporaryDirectory() as tmp:
+            before, after = Path(tmp, "b"), Path(tmp, "a")
+            self.write(before, "q4", "effect found", "size_scatter")
+            self.write(after, "q4", self.QUALIFIED, "size_scatter", ["rolling_resistance"], fits, {"run_seconds": 9})
+            self.write(before, "tilt", "effect found", "lateral_tilt")
+            self.write(after, "tilt", "effect found", "lateral_tilt", [])
+            cmd = [sys.executable, str(CALIBRATE / "alternatives_replay_compare.py"), str(before), str(after)]
+            done = subprocess.run(cmd, capture_output=True, text=True)
+            self.assertEqual(done.returncode, 0, done.stdout + done.stderr)
+            self.assertIn("q4: 'effect found' -> '" + self.QUALIFIED + "'; size_scatter or rolling_resistance; "
+                          "fits: size_scatter p 0.6, rolling_resistance p 0.3", done.stdout)
+            self.assertIn("cases compared: 2; with differences beyond rule 5: 0", done.stdout)
+            # A size that moved, a name without the qualifier, a qualifier without a name: each named, exit 1.
+            self.write(before, "drag", "effect found", "linear_drag")
+            self.write(after, "drag", "effect found", "linear_drag", [], extra={"chi2": 2.0})
+            self.write(before, "gap", "effect found", "gap_offset")
+            self.write(after, "gap", "effect found", "gap_offset", ["corner_rounding"])
+            self.write(before, "spin", "effect found", "spinning_friction")
+            self.write(after, "spin", self.QUALIFIED, "spinning_friction", [])
+            done = subprocess.run(cmd, capture_output=True, text=True)
+            self.assertEqual(done.returncode, 1, done.stdout)
+            self.assertIn("  DIFFERS: chi2", done.stdout)
+            self.assertIn("with differences beyond rule 5: 3 (drag, gap, spin)", done.stdout)
+            # A poor fit is not qualified by rule 5.
+            self.write(before, "roll", "effect found, poor fit remains", "rolling_resistance")
+            self.write(after, "roll", self.QUALIFIED, "rolling_resistance", ["linear_drag"])
+            done = subprocess.run(cmd + ["roll"], capture_output=True, text=True)
+            self.assertIn("DIFFERS: the verdict changed otherwise than rule 5 allows", done.stdout)
+            self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
+
+    def test_blind_summary_counts_the_found_effects_whose_identity_is_withheld(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp)
+            (folder / "truth").mkdir()
+            cases = {
+                "drag-low": (truth("drag-low", [DRAG], power=1.0, chi2=170.0),
+                             [added("linear_drag", DRAG["key"], 2.9, 2.5, 3.2) | {"alternatives": ["spinning_friction"]}],
+                             self.QUALIFIED),
+                "spin-high": (truth("spin-high", [SPIN], power=1.0, chi2=90.0),
+                              [added("spinning_friction", SPIN["key"], 0.7, 0.5, 0.9) | {"alternatives": []}],
+                              "effect found"),
+                "rolling-high": (truth("rolling-high", [ROLL], power=1.0, chi2=50.0),
+                                 [added("linear_drag", DRAG["key"], 1.0, 0.5, 1.5) |
+                                  {"alternatives": ["rolling_resistance"]}], self.QUALIFIED),
+                "outside-quadratic-4": (truth("outside-quadratic-4", [OUTSIDE], power=0.5, chi2=9.0),
+                                        [added("size_scatter", "particles.size_scatter", 0.08, 0.07, 0.09) |
+                                         {"alternatives": ["rolling_resistance", "linear_drag"]}], self.QUALIFIED),
+            }
+            for case, (t, effects, verdict) in cases.items():
+                (folder / "truth" / f"{case}.json").write_text(json.dumps(t))
+                (folder / case).mkdir()
+                (folder / case / "summary.json").write_text(json.dumps(summary(effects, verdict) | {"alternatives": 2}))
+            code, _, err = run("blind_summary.py", folder)
+            self.assertEqual(code, 0, err)
+            with open(folder / "cases.csv", newline="") as f:
+                rows = {r["case"]: r for r in csv.DictReader(f)}
+            self.assertEqual(rows["drag-low"]["alternatives"], "spinning_friction")
+            self.assertEqual(rows["spin-high"]["alternatives"], "none")
+            self.assertEqual(rows["drag-low"]["identified"], "True")  # still counted as identified
+            report = (folder / "report.md").read_text()
+            self.assertIn("planted effects found whose verdict says these data do not exclude another effect in its "
+                          "place (alternatives, rule 5; still counted as identified): 1 of 2 (50 %) "
+                          "(drag-low: spinning_friction)", report)
+            self.assertIn("single planted effects not identified, with alternatives named: rolling-high (linear_drag; "
+                          "not excluded: rolling_resistance)", report)
+            self.assertIn("size_scatter (not excluded in its place: rolling_resistance,linear_drag)", report)
+            # Summaries made without the option: no such lines, an empty column.
+            for case in cases:
+                s = json.loads((folder / case / "summary.json").read_text())
+                del s["alternatives"]
+                (folder / case / "summary.json").write_text(json.dumps(s))
+            self.assertEqual(run("blind_summary.py", folder)[0], 0)
+            self.assertNotIn("rule 5", (folder / "report.md").read_text())
+
 if __name__ == "__main__":
     unittest.main()

@@ -12,8 +12,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <random>
 #include <sstream>
 
@@ -251,6 +253,44 @@ TEST(WhichEffectToTry, AFitAtItsNeutralValueIsNeverTheOneTriedNorARival) {
   EXPECT_EQ(none.rivals, (std::vector<int>{1}));
 }
 
+TEST(AlternativesNotExcluded, AnotherFitThatAloneLeavesTheFittedPointsWithinTheNoiseIsNotExcluded) {
+  // Fits in score order, the first tried. Fitted chi^2 p of each (blind pass 11's restitution-high
+  // pattern: size scatter fitted alone leaves the fitted points within the noise too).
+  const std::vector<double> p{0.62, 0.179, 0.0004};
+  const std::vector<bool> all(3, true);
+  EXPECT_EQ(alternatives_not_excluded(p, all, 0, 0.05), (std::vector<int>{1}));
+  // The one tried is never its own alternative, whichever it is; p = alpha is within the noise.
+  EXPECT_EQ(alternatives_not_excluded(p, all, 1, 0.05), (std::vector<int>{0}));
+  EXPECT_EQ(alternatives_not_excluded({0.3, 0.05, 0.049}, all, 0, 0.05), (std::vector<int>{1}));
+  // A fit at its effect's neutral value explains nothing by the effect (rule 4's eligibility).
+  EXPECT_TRUE(alternatives_not_excluded(p, {true, false, true}, 0, 0.05).empty());
+  // A fit without a chi^2 (NaN) is not within the noise; with none tried every within-noise fit counts.
+  EXPECT_TRUE(alternatives_not_excluded({0.5, NAN}, {true, true}, 0, 0.05).empty());
+  EXPECT_EQ(alternatives_not_excluded(p, all, -1, 0.05), (std::vector<int>{0, 1}));
+  EXPECT_TRUE(alternatives_not_excluded({}, {}, 0, 0.05).empty());
+}
+
+TEST(FinalVerdict, AnEffectWithAlternativesNotExcludedWithholdsItsIdentityAfterThePoorFitAndHeldOutFlags) {
+  VerdictEvidence e{.effects_added = 1, .fitted_p_before = 0.00999, .fitted_p_after = 0.607, .held_out_n = 12,
+                    .held_out_fresh_p = 0.979, .alternatives = true};
+  EXPECT_EQ(final_verdict(e), "effect found; these data do not exclude another effect in its place");
+  // Which effect acts is said before how a drag depends on the speed.
+  e.law_undetermined = true;
+  EXPECT_EQ(final_verdict(e), "effect found; these data do not exclude another effect in its place");
+  e.alternatives = false;
+  EXPECT_EQ(final_verdict(e),
+            "effect found; the drag's law in the speed is not established: a drag of another law may be acting");
+  // A poor fit, or held-out points beyond the noise, say more: they come first.
+  e.alternatives = true;
+  e.held_out_fresh_p = 0.01;
+  EXPECT_EQ(final_verdict(e), "effect found; the held-out points are still beyond the noise");
+  e.fitted_p_after = 0.005;
+  EXPECT_EQ(final_verdict(e), "effect found, poor fit remains");
+  // Nothing added: the flag has nothing to qualify.
+  VerdictEvidence none{.fitted_p_before = 0.3, .fitted_p_after = 0.3, .alternatives = true};
+  EXPECT_EQ(final_verdict(none), "consistent with noise");
+}
+
 TEST(EffectResponses, ALaterRoundMeasuresAtTheNodesWithTheAddedEffectsAtTheirFittedValues) {
   const std::vector<ParameterSet> nodes{ParameterSet{}.with("particles.friction_particle", 0.3),
                                         ParameterSet{}.with("particles.friction_particle", 0.35)};
@@ -329,25 +369,82 @@ TEST(EffectResponses, WithTwoFreeParametersASmallMoveAroundANodeMeasuresNothingA
   EXPECT_FALSE(nearest_same_node(nodes, s, at(0.31, 0.205), at(0.36, 0.21)));
 }
 
-// The round table of report.md and summary.json's candidates carry the "left by the fit" share:
-// as many cells as the header has, and summary.json stays valid JSON (parsed by python3).
-TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {
+// Two exit_offset points (W/d 4 and 5), the data file of the report tests.
+DataFile two_point_data() {
   const std::string points =
       "[[point]]\nW_over_d = 4\nobservable = \"exit_offset\"\nvalue = 1\nuncertainty = 0.1\n"
       "[[point]]\nW_over_d = 5\nobservable = \"exit_offset\"\nvalue = 2\nuncertainty = 0.1\n";
-  const DataFile data = parse_data_file(
-      testing::data_file_head("set = [\"particles.count=30\"]\nreplicates = 2\n") + points, "t.toml",
-      testing::source_path(""));
+  return parse_data_file(testing::data_file_head("set = [\"particles.count=30\"]\nreplicates = 2\n") + points,
+                         "t.toml", testing::source_path(""));
+}
+
+// A result with a model at both points, before and after (points.csv reads them).
+CalibrationResult two_point_result() {
   CalibrationResult r;
   r.data_name = "t";
   r.model = "2d";
-  for (ModelState* s : {&r.before, &r.after}) {  // a model at both points (points.csv reads them)
+  for (ModelState* s : {&r.before, &r.after}) {
     s->prediction.value = s->prediction.fit = {1.1, 1.9};
     s->prediction.se_fit = {0.05, 0.05};
     s->prediction.valid = {true, true};
     s->whitened = {-1, 1};
   }
   r.before.fitted.chi.dof = 10;  // the residual's degrees of freedom (the detectability bound needs some)
+  return r;
+}
+
+// Rule 5 in the report: the fits table gives each fit's chi^2, the round names the alternatives not
+// excluded, the verdict line names them beside the effect, and summary.json carries them.
+TEST(CalibrationReport, AlternativesNotExcludedAreNamedInTheRoundTheVerdictAndTheSummary) {
+  const DataFile data = two_point_data();
+  CalibrationResult r = two_point_result();
+  r.alternatives = 2;
+  Round round;
+  round.best = "size_scatter";
+  round.fits = {{"size_scatter", 0.077, -259.7, false, {39.89, 43, 0.607}},
+                {"rolling_resistance", 0.004, -252.0, false, {47.1, 43, 0.31}},
+                {"linear_drag", 0.4, -240.0, false, {60.2, 43, 0.042}}};
+  round.alternatives = {"rolling_resistance"};
+  round.decision = "test";
+  r.rounds.push_back(round);
+  AddedEffect scatter;
+  scatter.effect = "size_scatter", scatter.key = "particles.size_scatter", scatter.value = 0.077;
+  scatter.group = {"size_scatter"}, scatter.alternatives = {"rolling_resistance"};
+  r.effects.push_back(scatter);
+  r.verdict = "effect found; these data do not exclude another effect in its place";
+  testing::TempDir dir("gapflow-calibration-report-alternatives");
+  write_calibration_outputs(data, r, dir.path(), false);
+  std::ifstream md(dir / "report.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("| effect | fitted size | BIC | fitted chi2 / nu (p) | at neutral |"), std::string::npos) << text;
+  EXPECT_NE(text.find("| rolling_resistance | 0.004 | -252.0 | 47.10 / 43 (0.31) |  |"), std::string::npos) << text;
+  EXPECT_NE(text.find("the best score is the one tried"), std::string::npos) << text;
+  EXPECT_NE(text.find("Not excluded in place of size_scatter (alone, the fitted points within the noise): "
+                      "rolling_resistance."),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("These data do not exclude rolling_resistance in its place: fitted alone instead of it, it "
+                      "leaves the fitted points within the noise too"),
+            std::string::npos)
+      << text;
+
+  const std::optional<std::string> python = find_python_with_matplotlib();
+  if (!python) GTEST_SKIP() << "no python3 to parse summary.json";
+  const std::string check = fmt::format(
+      "import json; s = json.load(open('{0}')); "
+      "assert s['alternatives'] == 2, s['alternatives']; "
+      "assert s['effects'][0]['alternatives'] == ['rolling_resistance'], s['effects']; "
+      "rd = s['rounds'][0]; assert rd['alternatives'] == ['rolling_resistance'], rd; "
+      "assert abs(rd['fits'][2]['fitted_p'] - 0.042) < 1e-12 and rd['fits'][2]['fitted_dof'] == 43, rd['fits']",
+      (dir / "summary.json").string());
+  EXPECT_EQ(run_program({*python, "-c", check}, dir / "python.log"), 0);
+}
+
+// The round table of report.md and summary.json's candidates carry the "left by the fit" share:
+// as many cells as the header has, and summary.json stays valid JSON (parsed by python3).
+TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {
+  const DataFile data = two_point_data();
+  CalibrationResult r = two_point_result();
   Round round;
   Candidate seen, unseen;
   seen.effect = "linear_drag", seen.key = "particles.drag_per_s", seen.step = 2, seen.visible = true;

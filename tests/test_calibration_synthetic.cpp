@@ -171,6 +171,7 @@ struct SyntheticCase {
   bool shallow_held_out = false;  // write_design's
   bool more_gaps = false;         // write_design's
   bool held_out_route = false;    // CalibrationDef's
+  int alternatives = 0;           // CalibrationDef's
   bool independent_signatures = CalibrationDef{}.independent_signatures;
   std::vector<std::string> outside = {};  // key=value planted outside the catalogue (the twin's --set)
 };
@@ -198,6 +199,7 @@ SyntheticRun calibrate_synthetic(const TempDir& dir, const std::vector<std::stri
   CalibrationDef def;
   def.contenders = contenders;
   def.held_out_route = c.held_out_route;
+  def.alternatives = c.alternatives;
   def.independent_signatures = c.independent_signatures;
   SyntheticRun run{calibrate(data, def, ev), ""};
   for (const std::string& line : run.result.log) run.log += line + "\n";
@@ -350,6 +352,47 @@ TEST(CalibrationSynthetic, WhenTwoCandidatesAreSignificantBothAreFittedAndThePla
   const SyntheticRun single = calibrate_synthetic(one, {"linear_drag=4"}, 1);
   ASSERT_FALSE(single.result.rounds.empty());
   EXPECT_TRUE(single.result.rounds.front().fits.empty());
+}
+
+// Rule 5 (decisions.hpp): with alternatives asked for, the other significant candidates are fitted
+// beside the one tried, and one that alone leaves the fitted points within the noise is named and
+// withholds the verdict's identity; the effect tried, its size and the keep test are those of the
+// loop without them. Spinning friction here acts like drag scaled by 4.5 / (W/d): on these gaps
+// (3.5-5.5 d) a large drag tells them apart, a small one leaves either within the noise.
+TEST(CalibrationSynthetic, AlternativesThatAloneFitWithinTheNoiseAreNamedAndChangeNothingElse) {
+  const double small = knob("GAPFLOW_ALT_SMALL", 1.0), large = knob("GAPFLOW_ALT_LARGE", 4.0);
+  for (double drag : {small, large}) {
+    const std::string planted = fmt::format("linear_drag={}", drag);
+    TempDir plain_dir("gapflow_calibration_synthetic_alt0"), alt_dir("gapflow_calibration_synthetic_alt1");
+    const SyntheticRun plain = calibrate_synthetic(plain_dir, {planted}, 1);
+    const SyntheticRun alt = calibrate_synthetic(alt_dir, {planted}, 1, {.alternatives = 1});
+    const CalibrationResult &p = plain.result, &a = alt.result;
+    ASSERT_EQ(a.effects.size(), 1u) << drag << ": the premise, one effect added\n" << alt.log;
+    ASSERT_EQ(p.effects.size(), a.effects.size()) << drag;
+    EXPECT_EQ(a.effects[0].effect, p.effects[0].effect) << drag;
+    EXPECT_EQ(a.effects[0].value, p.effects[0].value) << drag;
+    EXPECT_EQ(a.effects[0].lo95, p.effects[0].lo95) << drag;
+    EXPECT_EQ(a.after.fitted.chi.chi2, p.after.fitted.chi.chi2) << drag;
+    EXPECT_TRUE(p.rounds.front().fits.empty());
+    const Round& first = a.rounds.front();
+    ASSERT_EQ(first.fits.size(), 2u) << drag << "\n" << alt.log;
+    EXPECT_EQ(first.fits[0].effect, "linear_drag");
+    EXPECT_EQ(first.fits[1].effect, "spinning_friction");
+    const bool spinning_within = first.fits[1].fitted.p >= 0.05;
+    EXPECT_EQ(first.alternatives, spinning_within ? std::vector<std::string>{"spinning_friction"}
+                                                  : std::vector<std::string>{})
+        << drag;
+    EXPECT_EQ(a.effects[0].alternatives, first.alternatives) << drag;
+    if (spinning_within) {
+      EXPECT_EQ(a.verdict, "effect found; these data do not exclude another effect in its place") << drag;
+    } else {
+      EXPECT_EQ(a.verdict, p.verdict) << drag;
+    }
+    std::cout << fmt::format("drag {}: spinning friction's fit chi2 {:.2f} / {} (p {:.3g}); verdict: {}\n", drag,
+                             first.fits[1].fitted.chi2, first.fits[1].fitted.dof, first.fits[1].fitted.p, a.verdict);
+    // The premise of each size: the small drag leaves spinning friction within the noise, the large does not.
+    EXPECT_EQ(spinning_within, drag == small) << drag << "\n" << alt.log;
+  }
 }
 
 // A lateral tilt slows the flow quadratically (J is even in the tilt), and the loop measures it at

@@ -140,6 +140,10 @@ TEST(Hardening, MessagesBlameTheRightKeyAndSayWhy) {
   const std::string design = shell_quoted(source_path("data/examples/tiny_design.toml").string());
   expect_bad_input("calibrate " + design + " --check --contenders 0", "--contenders: Value 0 not in range 1 to 10");
   EXPECT_EQ(run_gapflow("calibrate " + design + " --check --contenders 1").code, 0);
+  // Rule 5's alternatives: 0 (none asked) to 9 (every other catalogue candidate).
+  expect_bad_input("calibrate " + design + " --check --alternatives 10", "--alternatives: Value 10 not in range 0 to 9");
+  expect_bad_input("calibrate " + design + " --check --alternatives -1", "--alternatives: Value -1 not in range 0 to 9");
+  EXPECT_EQ(run_gapflow("calibrate " + design + " --check --alternatives 2").code, 0);
   // The model's replicates in place of the data file's: as the file's own, 2 to 1000.
   expect_bad_input("calibrate " + design + " --check --model-replicates 1", "--model-replicates: Value 1 not in range 2 to 1000");
   const CliResult twelve = run_gapflow("calibrate " + design + " --check --model-replicates 12");
