@@ -492,6 +492,33 @@ class LawReplayCompare(unittest.TestCase):
             self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
 
 
+class FormCheckSignal(unittest.TestCase):
+    """calibrate/form_check_signal.py: the false alarms of twins whose planted effects were tried, by lambda."""
+
+    def test_counts_the_flags_below_and_above_the_median_signal(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            replay = Path(tmp, "pass", "replay-formcheck")
+            replay.mkdir(parents=True)
+            twins = [("a", 10, 0.9, "True"), ("b", 20, 0.5, "True"), ("c", 2000, 0.01, "True"),
+                     ("d", 3000, 0.03, "True"), ("e", 2500, 0.001, "False")]  # e: another effect tried, left out
+            with open(replay / "cases.csv", "w", newline="") as f:
+                w = csv.writer(f)
+                w.writerow(["case", "tried_planted", "signal_chi2"])
+                for case, lam, p, tried in twins:
+                    w.writerow([case, tried, lam])
+                    (replay / case).mkdir()
+                    checks = [{"p_adjusted": p, "column": "observable", "statistic": 9.0, "dof": 3},
+                              {"p_adjusted": 1.0, "column": "W_over_d", "statistic": 0.1, "dof": 2}]
+                    (replay / case / "summary.json").write_text(json.dumps({"form_checks": checks}))
+            code, out, err = run("form_check_signal.py", replay)
+            self.assertEqual(code, 0, err)
+            self.assertIn("| pass | c | 2000 | 0.01 | observable | 9.0 / 3 | yes |", out)
+            self.assertNotIn("| e |", out)
+            self.assertIn("twins: 4; flagged: 2; median lambda 1010", out)
+            self.assertIn("lambda <= median: 0 of 2 flagged; above: 2 of 2", out)
+            self.assertIn("flags whose smallest check splits by observable: 2 of 2", out)
+            self.assertIn("Mann-Whitney, flagged twins' lambda larger: U = 4, one-sided p = 0.167", out)
+
 class AlternativesReplayCompare(unittest.TestCase):
     """calibrate/alternatives_replay_compare.py: rule 5 may add fits and alternatives and qualify the verdict."""
 
