@@ -9,6 +9,7 @@
 
 #include "models/registry.hpp"
 #include "common/scenario_loader.hpp"
+#include "common/cpu_time.hpp"
 #include "common/shaking.hpp"
 
 #include <algorithm>
@@ -85,13 +86,6 @@ inline std::vector<std::string> board_for(const std::filesystem::path& file, int
     length = 10.0 * std::ceil(length * 1.05 / 10.0);
   }
   throw std::runtime_error("board_for: no board found for " + std::to_string(count) + " particles");
-}
-
-// CPU seconds of the calling thread (what Google Benchmark's CPU column counts).
-inline double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 // 64-bit FNV-1a, folded to 32 bits so that it survives as a double counter

@@ -176,7 +176,12 @@ def main(out):
             "oracle_power": signal["oracle_power"] if signal else "",
             "visible": (signal["oracle_power"] >= VISIBLE_POWER) if signal else "",
             "runs_total": summary["runs_simulated"] + summary["runs_reused"],
+            # Each run's wall time summed over every run the calibration used (reused ones too): CPU seconds
+            # where the cores were not shared, more where they were ("CPU s" up to pass 23).
             "cpu_s": summary["run_seconds"],
+            # The calibration process's CPU (every thread; the runs simulated in it): summaries from the
+            # commit after pass 23's binary on.
+            "process_cpu_s": summary.get("cpu_seconds", ""),
             "runs_simulated": summary["runs_simulated"],
             "wall_s": summary["wall_seconds"],
         })
@@ -379,8 +384,16 @@ def main(out):
         ]
     lines += [
         f"* cost of one calibration from an empty store (median over the 2D-made twins): {median(runs):.0f} runs, "
-        f"{median(cpu):.0f} CPU-s, about {median(cpu) / 2 / 60:.1f} min on 2 cores (range {cpu[0]:.0f}-{cpu[-1]:.0f} CPU-s)"
+        f"{median(cpu):.0f} CPU-s, about {median(cpu) / 2 / 60:.1f} min on 2 cores (range {cpu[0]:.0f}-{cpu[-1]:.0f} CPU-s; "
+        f"each run's wall time summed, so CPU seconds only where the cores were not shared)"
         if cpu else "* cost: no twins",
+    ]
+    process_cpu = sorted(r["process_cpu_s"] for r in rows if r["truth"] != "3D model" and r["process_cpu_s"] != "")
+    if process_cpu:
+        lines.append(f"* CPU the calibrations' processes used (every thread, the runs they simulated; a store shared "
+                     f"between twins lowers it): median {median(process_cpu):.0f} CPU-s "
+                     f"(range {process_cpu[0]:.0f}-{process_cpu[-1]:.0f})")
+    lines += [
         "",
         "## Confusion matrix",
         "",

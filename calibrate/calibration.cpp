@@ -6,6 +6,7 @@
 #include "calibrate/error_measures.hpp"
 #include "calibrate/fit.hpp"
 #include "calibrate/surface_noise.hpp"
+#include "common/cpu_time.hpp"
 #include "common/statistics.hpp"
 #include "common/toml_strict.hpp"
 
@@ -568,6 +569,7 @@ std::string model_noise_text(double share, int model_replicates) {
 
 CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Evaluator& ev) {
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = process_cpu_seconds();
   CalibrationResult out;
   out.data_name = data.name;
   out.model = to_string(def.model);
@@ -642,6 +644,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   out.runs_reused = ev.runs_reused();
   out.run_seconds = ev.run_seconds();
   out.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.cpu_seconds = process_cpu_seconds() - cpu_start;
   return out;
 }
 

@@ -184,7 +184,10 @@ struct CalibrationResult {
   ChiSquare held_out_fresh_fit_aware;
   bool held_out_beyond_noise = false;  // its p < alpha
   int runs_simulated = 0, runs_reused = 0;
-  double run_seconds = 0, wall_seconds = 0;
+  double run_seconds = 0, wall_seconds = 0;  // every run's wall time summed (reused ones too: the cost from an
+                                             // empty store, swollen where the cores were shared); the loop's wall
+  double cpu_seconds = 0;  // this process's CPU during the calibration, every thread (the runs simulated here and
+                           // the loop; under MPI rank 0's alone)
   std::vector<std::string> log;    // every decision in order
 };
 

@@ -218,8 +218,10 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                      json_number(d.largest_step_p), d.step_reached_range_end ? "true" : "false");
   }
   o << "],\n";
-  o << fmt::format("  \"runs_simulated\": {},\n  \"runs_reused\": {},\n  \"run_seconds\": {},\n  \"wall_seconds\": {}\n}}\n",
-                   r.runs_simulated, r.runs_reused, json_number(r.run_seconds), json_number(r.wall_seconds));
+  o << fmt::format("  \"runs_simulated\": {},\n  \"runs_reused\": {},\n  \"run_seconds\": {},\n  \"cpu_seconds\": {},\n"
+                   "  \"wall_seconds\": {}\n}}\n",
+                   r.runs_simulated, r.runs_reused, json_number(r.run_seconds), json_number(r.cpu_seconds),
+                   json_number(r.wall_seconds));
 }
 
 void write_points_csv(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
@@ -388,9 +390,12 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
   o << "\n## Log\n\n```\n";
   for (const std::string& l : r.log) o << l << "\n";
   o << "```\n";
-  o << fmt::format("\nCost: {} runs simulated, {} reused from the store; {:.0f} s of runs (about CPU seconds), {:.0f} s wall; "
-                   "{} model replicates per point and parameter value.\n",
-                   r.runs_simulated, r.runs_reused, r.run_seconds, r.wall_seconds, data.model_replicates);
+  o << fmt::format("\nCost: {} runs simulated, {} reused from the store; {:.0f} s of runs (each run's wall time, summed "
+                   "over every run used, reused ones included: the cost from an empty store, swollen where the cores "
+                   "were shared); {:.0f} CPU s in this process (the runs simulated here and the loop; under MPI rank "
+                   "0's alone); {:.0f} s wall; {} model replicates per point and parameter value.\n",
+                   r.runs_simulated, r.runs_reused, r.run_seconds, r.cpu_seconds, r.wall_seconds,
+                   data.model_replicates);
   o << "\nFigures: `data_vs_model.png` (data and model before/after with error bars against each design column), `residuals.png`, `candidate_scores.png`.\n";
 }
 

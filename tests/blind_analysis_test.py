@@ -588,10 +588,11 @@ class AlternativesReplayCompare(unittest.TestCase):
                                         [added("size_scatter", "particles.size_scatter", 0.08, 0.07, 0.09) |
                                          {"alternatives": ["rolling_resistance", "linear_drag"]}], self.QUALIFIED),
             }
-            for case, (t, effects, verdict) in cases.items():
+            for i, (case, (t, effects, verdict)) in enumerate(cases.items()):
                 (folder / "truth" / f"{case}.json").write_text(json.dumps(t))
                 (folder / case).mkdir()
-                (folder / case / "summary.json").write_text(json.dumps(summary(effects, verdict) | {"alternatives": 2}))
+                s = summary(effects, verdict) | {"alternatives": 2, "cpu_seconds": 100.0 + 10 * i}
+                (folder / case / "summary.json").write_text(json.dumps(s))
             code, _, err = run("blind_summary.py", folder)
             self.assertEqual(code, 0, err)
             with open(folder / "cases.csv", newline="") as f:
@@ -606,6 +607,11 @@ class AlternativesReplayCompare(unittest.TestCase):
             self.assertIn("single planted effects not identified, with alternatives named: rolling-high (linear_drag; "
                           "not excluded: rolling_resistance)", report)
             self.assertIn("size_scatter (not excluded in its place: rolling_resistance,linear_drag)", report)
+            # The processes' own CPU beside the runs' summed wall times (600 s each in the fixture).
+            self.assertIn("600 CPU-s, about 5.0 min on 2 cores (range 600-600 CPU-s; each run's wall time summed, so "
+                          "CPU seconds only where the cores were not shared)", report)
+            self.assertIn("* CPU the calibrations' processes used (every thread, the runs they simulated; a store "
+                          "shared between twins lowers it): median 115 CPU-s (range 100-130)", report)
             # Summaries made without the option: no such lines, an empty column.
             for case in cases:
                 s = json.loads((folder / case / "summary.json").read_text())
@@ -613,6 +619,7 @@ class AlternativesReplayCompare(unittest.TestCase):
                 (folder / case / "summary.json").write_text(json.dumps(s))
             self.assertEqual(run("blind_summary.py", folder)[0], 0)
             self.assertNotIn("rule 5", (folder / "report.md").read_text())
+            self.assertIn("CPU the calibrations' processes used", (folder / "report.md").read_text())
 
 if __name__ == "__main__":
     unittest.main()

@@ -346,6 +346,8 @@ TEST(CalibrationSynthetic, WhenTwoCandidatesAreSignificantBothAreFittedAndThePla
   ASSERT_NE(fit_of("spinning_friction"), first.fits.end()) << run.log;
   EXPECT_LT(fit_of("linear_drag")->bic, fit_of("spinning_friction")->bic);
   EXPECT_EQ(first.best, "linear_drag");
+  // What it cost this process (every thread), apart from the runs' summed wall times.
+  EXPECT_GT(run.result.cpu_seconds, 0);
 
   // With one contender the best score is tried and nothing is fitted beforehand.
   TempDir one("gapflow_calibration_synthetic_one");
