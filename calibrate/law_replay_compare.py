@@ -17,7 +17,7 @@ from pathlib import Path
 LAW_FIELDS = {"law_power", "law_undetermined"}
 CHECK_LAW_FIELDS = {"law_spread", "law_power"}
 # Timing and run counts depend on the machine and on what the store held, not on the decisions.
-RUN_FIELDS = {"run_seconds", "wall_seconds", "runs_simulated", "runs_reused", "data_file"}
+RUN_FIELDS = {"run_seconds", "cpu_seconds", "wall_seconds", "runs_simulated", "runs_reused", "data_file"}
 DRAG = "linear_drag"
 
 

@@ -543,7 +543,8 @@ class AlternativesReplayCompare(unittest.TestCase):
         with tempfile.TemporaryDirectory() as tmp:
             before, after = Path(tmp, "b"), Path(tmp, "a")
             self.write(before, "q4", "effect found", "size_scatter")
-            self.write(after, "q4", self.QUALIFIED, "size_scatter", ["rolling_resistance"], fits, {"run_seconds": 9})
+            self.write(after, "q4", self.QUALIFIED, "size_scatter", ["rolling_resistance"], fits,
+                       {"run_seconds": 9, "cpu_seconds": 7})  # a binary that measures its CPU: a run field
             self.write(before, "tilt", "effect found", "lateral_tilt")
             self.write(after, "tilt", "effect found", "lateral_tilt", [])
             cmd = [sys.executable, str(CALIBRATE / "alternatives_replay_compare.py"), str(before), str(after)]
