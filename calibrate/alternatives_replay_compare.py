@@ -5,7 +5,10 @@ For every case that both folders hold (<case>/summary.json), compares a replay m
 --alternatives N (AFTER) with the same calibrations made without it (BEFORE; a blind pass itself):
 rule 5 fits other candidates beside the one tried and changes nothing the loop decides, so every
 summary.json field must be equal but the verdict, the option's record, the added effects' and the
-rounds' alternatives, the rounds' fits (rule 5 adds them) and the timing and run counts. The
+rounds' alternatives, the rounds' fits (rule 5 adds them after those rule 4 made, which must stay as
+they were) and the timing and run counts; each round's alternatives must be what its fits give (with
+one contender: every fit but the one tried, not at neutral, fitted p >= 0.05), and each added effect's
+those of its round less the effects added. The
 verdict may change only to "effect found; these data do not exclude another effect in its place",
 where AFTER names an alternative and BEFORE said "effect found" (or only added the drag's law
 qualifier). One line per case, then the count of cases with other differences (exit 1 if any).
@@ -27,9 +30,42 @@ def named(summary):
     return {e["effect"]: e["alternatives"] for e in summary.get("effects", []) if e.get("alternatives")}
 
 
+ALPHA = 0.05  # the loop's level (CalibrationDef::alpha; the blind passes run the default)
+FITTED = {"fitted_chi2", "fitted_dof", "fitted_p"}
+
+
+def expected_alternatives(rd):
+    """Rule 5 recomputed from a round's fits: every fit but the one tried, not at neutral, fitted p >= alpha."""
+    return [f["effect"] for f in rd.get("fits", []) if f["effect"] != rd.get("best") and not f.get("at_neutral")
+            and f.get("fitted_p") is not None and f["fitted_p"] >= ALPHA]
+
+
+def rule_5_inconsistencies(before, after):
+    """What rule 5 wrote that its own fits do not bear out, or fits it changed that rule 4 made."""
+    out = []
+    rounds_before, rounds_after = before.get("rounds", []), after.get("rounds", [])
+    for k, rd in enumerate(rounds_after):
+        fits_before = compare.without(rounds_before[k].get("fits", []), FITTED) if k < len(rounds_before) else []
+        if compare.without(rd.get("fits", [])[:len(fits_before)], FITTED) != fits_before:
+            out.append(f"round {k + 1}: the fits rule 4 made changed")
+        named = rd.get("alternatives", [])
+        if after.get("contenders", 1) < 2 and named != expected_alternatives(rd):
+            out.append(f"round {k + 1}: alternatives {named} where its fits give {expected_alternatives(rd)}")
+        if not set(named) <= {f["effect"] for f in rd.get("fits", [])}:
+            out.append(f"round {k + 1}: an alternative that was not fitted")
+    added = {e["effect"] for e in after.get("effects", [])}
+    for e in after.get("effects", []):
+        rounds = [rd for rd in rounds_after if rd.get("best") == e["effect"]]
+        from_round = [n for n in (rounds[-1].get("alternatives", []) if rounds else []) if n not in added]
+        if e.get("alternatives", []) != from_round:
+            out.append(f"{e['effect']}: alternatives {e.get('alternatives', [])} where its round gives {from_round}")
+    return out
+
+
 def differences(before, after):
     return compare.other_differences(before, after, allowed={"alternatives"},
-                                     allowed_in={"effects": {"alternatives"}, "rounds": {"fits", "alternatives"}})
+                                     allowed_in={"effects": {"alternatives"}, "rounds": {"fits", "alternatives"}}) + \
+        rule_5_inconsistencies(before, after)
 
 
 def verdict_change_allowed(before, after):
@@ -39,8 +75,8 @@ def verdict_change_allowed(before, after):
 
 
 def describe(case, before, after):
-    fits = [f"{f['effect']} p {f['fitted_p']:.3g}" for rd in after.get("rounds", []) for f in rd.get("fits", [])
-            if "fitted_p" in f]
+    fits = [f"{f['effect']} p {'-' if f['fitted_p'] is None else format(f['fitted_p'], '.3g')}"
+            for rd in after.get("rounds", []) for f in rd.get("fits", []) if "fitted_p" in f]
     change = "unchanged" if before["verdict"] == after["verdict"] else f"'{before['verdict']}' ->"
     alternatives = "; ".join(f"{e} or {', '.join(a)}" for e, a in named(after).items()) or "none named"
     return f"{case}: {change} '{after['verdict']}'; {alternatives}; fits: {', '.join(fits) or 'none'}"

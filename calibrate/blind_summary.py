@@ -81,6 +81,8 @@ def contests(summary):
     """Rounds whose significant candidates were fitted in full (decisions.hpp rule 4, from dc3e474 on):
     (the best score's effect, the effect tried) per such round."""
     out = []
+    if summary.get("contenders", 1) < 2:  # fits made for rule 5 alone (--alternatives) chose nothing
+        return out
     for rd in summary.get("rounds", []):
         if not rd.get("fits"):
             continue
@@ -369,8 +371,9 @@ def main(out):
         with_alt = [r for r in found_rows if named_alternatives(r)]
         wrong = [r for r in single if r["identified"] is False and named_alternatives(r)]
         lines += [
-            f"* planted effects found whose verdict says these data do not exclude another effect in its place "
-            f"(alternatives, rule 5; still counted as identified): {pct(len(with_alt), len(found_rows))}"
+            f"* planted effects found with alternatives these data do not exclude in their place (rule 5; the "
+            f"verdict says so unless a poor fit or held-out points beyond the noise come first; still counted as "
+            f"identified): {pct(len(with_alt), len(found_rows))}"
             + (f" ({', '.join(r['case'] + ': ' + r['alternatives'] for r in with_alt)})" if with_alt else ""),
             f"* single planted effects not identified, with alternatives named: "
             f"{', '.join(r['case'] + ' (' + r['said'] + '; not excluded: ' + r['alternatives'] + ')' for r in wrong) or 'none'}",

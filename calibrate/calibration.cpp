@@ -271,7 +271,10 @@ class Loop {
     for (const Candidate& c : round.candidates)
       if (c.visible) visible.push_back(&c), score.push_back(c.score.statistic), p_adjusted.push_back(c.p_adjusted);
     const int compared = std::max(def_.contenders, 1);  // rule 4 chooses among the first this many
-    const int asked = def_.alternatives > 0 ? std::max(compared, 1 + def_.alternatives) : compared;
+    // Rule 5 asks only where the fitted points are beyond the noise at the round's start: where they
+    // pass already (rule 1's decisive-score and held-out routes) every alternative would pass too.
+    const bool ask_alternatives = def_.alternatives > 0 && state.fitted.chi.p < def_.alpha;
+    const int asked = ask_alternatives ? std::max(compared, 1 + def_.alternatives) : compared;
     std::vector<int> picks = contenders(score, p_adjusted, def_.alpha, asked);
     const auto best_pick = std::find_if(picks.begin(), picks.end(),
                                         [&](int m) { return visible[static_cast<std::size_t>(m)]->effect == round.best; });
@@ -306,7 +309,7 @@ class Loop {
       tried = choice.winner;
       round.best = round.fits[static_cast<std::size_t>(tried)].effect;
     }
-    if (def_.alternatives > 0)
+    if (ask_alternatives)
       for (int a : alternatives_not_excluded(fitted_p, eligible, tried, def_.alpha))
         round.alternatives.push_back(round.fits[static_cast<std::size_t>(a)].effect);
     std::vector<std::string> listed;
@@ -316,10 +319,10 @@ class Loop {
     const auto significant = std::count_if(p_adjusted.begin(), p_adjusted.end(), [&](double p) { return p < def_.alpha; });
     std::string line = fmt::format("{} candidates significant, {} fitted in full: {}; tried: {}", significant,
                                    picks.size(), fmt::join(listed, ", "), round.best);
-    if (def_.alternatives > 0)
+    if (ask_alternatives)
       line += round.alternatives.empty()
-                  ? "; no other leaves the fitted points within the noise alone"
-                  : fmt::format("; not excluded in its place (alone, the fitted points within the noise): {}",
+                  ? "; no other, in its place, leaves the fitted points within the noise"
+                  : fmt::format("; not excluded in its place (the fitted points within the noise with it instead): {}",
                                 fmt::join(round.alternatives, ", "));
     say(line);
     return std::move(trials[static_cast<std::size_t>(tried)]);
@@ -600,6 +603,12 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   ModelState state = out.before;
   if (def.max_effects > 0) loop.attribute(base, surface, state);
   out.after = state;
+
+  // An alternative that was added itself (in a later round) stands beside the effect, not in its place.
+  for (AddedEffect& e : out.effects)
+    std::erase_if(e.alternatives, [&](const std::string& name) {
+      return std::any_of(out.effects.begin(), out.effects.end(), [&](const AddedEffect& a) { return a.effect == name; });
+    });
 
   // Fresh seeds: the fitted parameters before and after, simulated directly on other runs.
   const std::vector<Prediction> fresh =

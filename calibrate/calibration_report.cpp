@@ -279,8 +279,9 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                      e.interval_bounded ? "" : ", cut at the end of the range the fit may move it in", e.neutral,
                      e.group.size() > 1 ? fmt::format(", standing for the group {{{}}} that this design cannot tell apart", fmt::join(e.group, ", ")) : "");
     if (!e.alternatives.empty())
-      o << fmt::format(" These data do not exclude {} in its place: fitted alone instead of it, {} the fitted points "
-                       "within the noise too (chi2 p >= {:.2g}; section \"Candidate effects\").",
+      o << fmt::format(" These data do not exclude {} in its place: fitted instead of it (with whatever was added "
+                       "before it), {} the fitted points within the noise (chi2 p >= {:.2g}; section \"Candidate "
+                       "effects\").",
                        fmt::join(e.alternatives, ", "), e.alternatives.size() > 1 ? "each leaves" : "it leaves", r.alpha);
   }
   // An attribution is a choice among the catalogue's effects: one outside it that changes these
@@ -372,12 +373,13 @@ void write_report_md(std::ostream& o, const DataFile& data, const CalibrationRes
                          f.fitted.chi2, f.fitted.dof, f.fitted.p, f.at_neutral ? "yes" : "");
       if (r.alternatives > 0)
         o << (rd.alternatives.empty()
-                  ? std::string("\nNo other leaves the fitted points within the noise alone.\n")
-                  : fmt::format("\nNot excluded in place of {} (alone, the fitted points within the noise): {}.\n",
+                  ? std::string("\nNo other, in its place, leaves the fitted points within the noise.\n")
+                  : fmt::format("\nIn place of {}, these leave the fitted points within the noise (chi2 p >= "
+                                "alpha): {}.\n",
                                 rd.best, fmt::join(rd.alternatives, ", ")));
     }
     if (rd.rivals.size() > 1)
-      o << fmt::format(fmt::runtime(rd.fits.empty() ? "\nThese data cannot rank them below the best (score within chi2_1(0.95) = "
+      o << fmt::format(fmt::runtime(r.contenders < 2 || rd.fits.empty() ? "\nThese data cannot rank them below the best (score within chi2_1(0.95) = "
                                          "3.84 of {}): {}.\n"
                                        : "\nThese data cannot rank them below the one tried ({}; fitted BIC within "
                                          "chi2_1(0.95) = 3.84, or score within 3.84 and not fitted): {}.\n"),

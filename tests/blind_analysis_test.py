@@ -528,6 +528,8 @@ class AlternativesReplayCompare(unittest.TestCase):
         d = Path(folder) / case
         d.mkdir(parents=True)
         e = {"effect": effect, "value": 0.08}
+        if alternatives and not fits:  # the fits that bear the alternatives out: the tried one's, then theirs
+            fits = [{"effect": effect, "fitted_p": 0.5}] + [{"effect": a, "fitted_p": 0.3} for a in alternatives]
         rd = {"best": effect, "decision": "added", "fits": list(fits)}
         if alternatives is not None:
             e["alternatives"] = alternatives
@@ -570,6 +572,22 @@ class AlternativesReplayCompare(unittest.TestCase):
             done = subprocess.run(cmd + ["roll"], capture_output=True, text=True)
             self.assertIn("DIFFERS: the verdict changed otherwise than rule 5 allows", done.stdout)
             self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
+            # What rule 5 wrote must be what its fits give, and the fits rule 4 made must stay.
+            rule4 = [{"effect": "rolling_contact", "bic": -10.0}]
+            self.write(before, "r4", "effect found", "rolling_contact", fits=rule4)
+            self.write(after, "r4", "effect found", "rolling_contact", [], [{"effect": "rolling_contact", "bic": -9.0}])
+            self.write(before, "low", "effect found", "restitution")
+            self.write(after, "low", self.QUALIFIED, "restitution", ["size_scatter"],
+                       [{"effect": "restitution", "fitted_p": 0.5}, {"effect": "size_scatter", "fitted_p": 0.01}])
+            self.write(before, "nan", "effect found", "corner_rounding")
+            self.write(after, "nan", "effect found", "corner_rounding", [],
+                       [{"effect": "corner_rounding", "fitted_p": 0.5}, {"effect": "gap_offset", "fitted_p": None}])
+            done = subprocess.run(cmd + ["r4", "low", "nan"], capture_output=True, text=True)
+            self.assertIn("DIFFERS: round 1: the fits rule 4 made changed", done.stdout)
+            self.assertIn("DIFFERS: round 1: alternatives ['size_scatter'] where its fits give []", done.stdout)
+            self.assertIn("nan: unchanged 'effect found'; none named; fits: corner_rounding p 0.5, gap_offset p -",
+                          done.stdout)
+            self.assertIn("with differences beyond rule 5: 2 (r4, low)", done.stdout)
 
     def test_blind_summary_counts_the_found_effects_whose_identity_is_withheld(self):
         with tempfile.TemporaryDirectory() as tmp:
@@ -593,18 +611,22 @@ class AlternativesReplayCompare(unittest.TestCase):
                 (folder / "truth" / f"{case}.json").write_text(json.dumps(t))
                 (folder / case).mkdir()
                 s = summary(effects, verdict) | {"alternatives": 2, "cpu_seconds": 100.0 + 10 * i}
+                # Rule 5's fits beside the best score, which is tried: not a rule-4 contest (contenders 1).
+                s["rounds"] = [{"best": effects[0]["effect"], "fits": [{"effect": effects[0]["effect"]}],
+                                "candidates": [{"effect": "restitution", "visible": True, "score": 20.0}]}]
                 (folder / case / "summary.json").write_text(json.dumps(s))
             code, _, err = run("blind_summary.py", folder)
             self.assertEqual(code, 0, err)
             with open(folder / "cases.csv", newline="") as f:
                 rows = {r["case"]: r for r in csv.DictReader(f)}
             self.assertEqual(rows["drag-low"]["alternatives"], "spinning_friction")
+            self.assertEqual(rows["drag-low"]["contests"], "")
             self.assertEqual(rows["spin-high"]["alternatives"], "none")
             self.assertEqual(rows["drag-low"]["identified"], "True")  # still counted as identified
             report = (folder / "report.md").read_text()
-            self.assertIn("planted effects found whose verdict says these data do not exclude another effect in its "
-                          "place (alternatives, rule 5; still counted as identified): 1 of 2 (50 %) "
-                          "(drag-low: spinning_friction)", report)
+            self.assertIn("planted effects found with alternatives these data do not exclude in their place (rule 5; "
+                          "the verdict says so unless a poor fit or held-out points beyond the noise come first; still "
+                          "counted as identified): 1 of 2 (50 %) (drag-low: spinning_friction)", report)
             self.assertIn("single planted effects not identified, with alternatives named: rolling-high (linear_drag; "
                           "not excluded: rolling_resistance)", report)
             self.assertIn("size_scatter (not excluded in its place: rolling_resistance,linear_drag)", report)

@@ -405,6 +405,7 @@ TEST(CalibrationReport, AlternativesNotExcludedAreNamedInTheRoundTheVerdictAndTh
                 {"rolling_resistance", 0.004, -252.0, false, {47.1, 43, 0.31}},
                 {"linear_drag", 0.4, -240.0, false, {60.2, 43, 0.042}}};
   round.alternatives = {"rolling_resistance"};
+  round.rivals = {"size_scatter", "rolling_resistance"};
   round.decision = "test";
   r.rounds.push_back(round);
   AddedEffect scatter;
@@ -419,12 +420,17 @@ TEST(CalibrationReport, AlternativesNotExcludedAreNamedInTheRoundTheVerdictAndTh
   EXPECT_NE(text.find("| effect | fitted size | BIC | fitted chi2 / nu (p) | at neutral |"), std::string::npos) << text;
   EXPECT_NE(text.find("| rolling_resistance | 0.004 | -252.0 | 47.10 / 43 (0.31) |  |"), std::string::npos) << text;
   EXPECT_NE(text.find("the best score is the one tried"), std::string::npos) << text;
-  EXPECT_NE(text.find("Not excluded in place of size_scatter (alone, the fitted points within the noise): "
+  EXPECT_NE(text.find("In place of size_scatter, these leave the fitted points within the noise (chi2 p >= alpha): "
                       "rolling_resistance."),
             std::string::npos)
       << text;
-  EXPECT_NE(text.find("These data do not exclude rolling_resistance in its place: fitted alone instead of it, it "
-                      "leaves the fitted points within the noise too"),
+  EXPECT_NE(text.find("These data do not exclude rolling_resistance in its place: fitted instead of it (with "
+                      "whatever was added before it), it leaves the fitted points within the noise"),
+            std::string::npos)
+      << text;
+  // With the best score tried (contenders 1), the rivals are the score's, whatever was fitted for rule 5.
+  EXPECT_NE(text.find("These data cannot rank them below the best (score within chi2_1(0.95) = 3.84 of size_scatter): "
+                      "size_scatter, rolling_resistance."),
             std::string::npos)
       << text;
 

@@ -376,6 +376,11 @@ TEST(CalibrationSynthetic, AlternativesThatAloneFitWithinTheNoiseAreNamedAndChan
     EXPECT_EQ(a.effects[0].lo95, p.effects[0].lo95) << drag;
     EXPECT_EQ(a.after.fitted.chi.chi2, p.after.fitted.chi.chi2) << drag;
     EXPECT_TRUE(p.rounds.front().fits.empty());
+    ASSERT_EQ(a.rounds.size(), p.rounds.size()) << drag;
+    for (std::size_t k = 0; k < a.rounds.size(); ++k) {
+      EXPECT_EQ(a.rounds[k].decision, p.rounds[k].decision) << drag;  // the keep test's evidence is in it
+      EXPECT_EQ(a.rounds[k].best, p.rounds[k].best) << drag;
+    }
     const Round& first = a.rounds.front();
     ASSERT_EQ(first.fits.size(), 2u) << drag << "\n" << alt.log;
     EXPECT_EQ(first.fits[0].effect, "linear_drag");
