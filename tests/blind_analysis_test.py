@@ -588,6 +588,40 @@ class AlternativesReplayCompare(unittest.TestCase):
             self.assertIn("nan: unchanged 'effect found'; none named; fits: corner_rounding p 0.5, gap_offset p -",
                           done.stdout)
             self.assertIn("with differences beyond rule 5: 2 (r4, low)", done.stdout)
+            # An added effect's alternatives are its round's less the effects added: a name its round did not give,
+            # or one a later round added beside it, is a difference.
+            fits = [{"effect": "size_scatter", "fitted_p": 0.6}, {"effect": "rolling_resistance", "fitted_p": 0.3}]
+            self.write(before, "eff", "effect found", "size_scatter")
+            self.write(after, "eff", self.QUALIFIED, "size_scatter", ["rolling_resistance"], fits)
+            s = json.loads((after / "eff" / "summary.json").read_text())
+            s["effects"][0]["alternatives"] = ["linear_drag"]
+            (after / "eff" / "summary.json").write_text(json.dumps(s))
+            two = [{"effect": "size_scatter", "value": 0.08}, {"effect": "rolling_resistance", "value": 0.01}]
+            for folder, alternatives in ((before, None), (after, [[], []])):
+                d = folder / "pair"
+                d.mkdir()
+                effects = [dict(e) for e in two]
+                rounds = [{"best": "size_scatter", "decision": "added"},
+                          {"best": "rolling_resistance", "decision": "added"}]
+                if alternatives is not None:  # rule 5 named rolling resistance in round 1; round 2 added it
+                    rounds[0] |= {"fits": fits, "alternatives": ["rolling_resistance"]}
+                    rounds[1] |= {"fits": [], "alternatives": []}
+                    for e, a in zip(effects, alternatives):
+                        e["alternatives"] = a
+                s = {"verdict": "effect found", "effects": effects, "rounds": rounds, "chi2": 1.0}
+                if alternatives is not None:
+                    s["alternatives"] = 2
+                (d / "summary.json").write_text(json.dumps(s))
+            done = subprocess.run(cmd + ["eff", "pair"], capture_output=True, text=True)
+            self.assertIn("DIFFERS: size_scatter: alternatives ['linear_drag'] where its round gives "
+                          "['rolling_resistance']", done.stdout)
+            self.assertIn("with differences beyond rule 5: 1 (eff)", done.stdout)
+            s = json.loads((after / "pair" / "summary.json").read_text())
+            s["effects"][0]["alternatives"] = ["rolling_resistance"]  # kept though a later round added it
+            (after / "pair" / "summary.json").write_text(json.dumps(s))
+            done = subprocess.run(cmd + ["pair"], capture_output=True, text=True)
+            self.assertIn("DIFFERS: size_scatter: alternatives ['rolling_resistance'] where its round gives []",
+                          done.stdout)
 
     def test_blind_summary_counts_the_found_effects_whose_identity_is_withheld(self):
         with tempfile.TemporaryDirectory() as tmp:
