@@ -5,6 +5,7 @@
 #include "calibrate/effect_responses.hpp"
 #include "calibrate/error_measures.hpp"
 #include "calibrate/fit.hpp"
+#include "calibrate/noise_notes.hpp"
 #include "calibrate/surface_noise.hpp"
 #include "common/cpu_time.hpp"
 #include "common/statistics.hpp"
@@ -22,39 +23,6 @@
 namespace gapflow {
 
 namespace {
-
-// Points that measure different observables on the same runs have correlated
-// noise, which the chi^2 (a sum over points) ignores. Measured here, per pair of
-// observables, on the baseline nodes' replicates (each point's values centred per
-// node, pooled over the point pairs), and logged so that a reader can judge it.
-std::vector<std::string> shared_run_correlations(const DataFile& data, const BaselineFit& base) {
-  std::map<std::pair<ObservableKind, ObservableKind>, std::pair<std::vector<double>, std::vector<double>>> pooled;
-  for (std::size_t i = 0; i < data.points.size(); ++i)
-    for (std::size_t j = i + 1; j < data.points.size(); ++j) {
-      if (data.points[i].design != data.points[j].design) continue;
-      auto& [a, b] = pooled[{data.points[i].observable, data.points[j].observable}];
-      for (const Prediction& p : base.node_predictions) {
-        const std::vector<double>& x = p.replicate_fit[i];
-        const std::vector<double>& y = p.replicate_fit[j];
-        std::vector<double> xs, ys;
-        for (std::size_t r = 0; r < std::min(x.size(), y.size()); ++r)
-          if (x[r] == x[r] && y[r] == y[r]) xs.push_back(x[r]), ys.push_back(y[r]);
-        if (xs.size() < 2) continue;
-        const double mx = summarize(xs).mean, my = summarize(ys).mean;
-        for (std::size_t r = 0; r < xs.size(); ++r) a.push_back(xs[r] - mx), b.push_back(ys[r] - my);
-      }
-    }
-  std::vector<std::string> out;
-  for (const auto& [kinds, v] : pooled) {
-    const auto& [a, b] = v;
-    double sab = 0, saa = 0, sbb = 0;
-    for (std::size_t r = 0; r < a.size(); ++r) sab += a[r] * b[r], saa += a[r] * a[r], sbb += b[r] * b[r];
-    if (saa <= 0 || sbb <= 0) continue;
-    out.push_back(fmt::format("{} / {}: rho = {:+.2f} over {} replicate pairs", to_string(kinds.first),
-                              to_string(kinds.second), sab / std::sqrt(saa * sbb), a.size()));
-  }
-  return out;
-}
 
 // The fitted points of a per-point vector, whitened by the state's total sigma.
 Eigen::VectorXd fitted_whitened(const DataFile& data, const Prediction& at, const std::vector<double>& per_point) {
@@ -266,66 +234,86 @@ class Loop {
   // round.alternatives names those that alone leave the fitted points within the noise.
   Trial contest(Round& round, const std::vector<EffectTerm>& terms, const Reference& ref, const Surface& surface,
                 const ModelState& state) {
-    std::vector<const Candidate*> visible;
-    std::vector<double> score, p_adjusted;
-    for (const Candidate& c : round.candidates)
-      if (c.visible) visible.push_back(&c), score.push_back(c.score.statistic), p_adjusted.push_back(c.p_adjusted);
     const int compared = std::max(def_.contenders, 1);  // rule 4 chooses among the first this many
     // Rule 5 asks only where the fitted points are beyond the noise at the round's start: where they
     // pass already (rule 1's decisive-score and held-out routes) every alternative would pass too.
     const bool ask_alternatives = def_.alternatives > 0 && state.fitted.chi.p < def_.alpha;
-    const int asked = ask_alternatives ? std::max(compared, 1 + def_.alternatives) : compared;
-    std::vector<int> picks = contenders(score, p_adjusted, def_.alpha, asked);
-    const auto best_pick = std::find_if(picks.begin(), picks.end(),
-                                        [&](int m) { return visible[static_cast<std::size_t>(m)]->effect == round.best; });
-    if (best_pick == picks.end() || picks.size() < 2)  // the best not significant: a route of rule 1's options
+    const std::vector<const Candidate*> picked =
+        significant_picks(round, ask_alternatives ? std::max(compared, 1 + def_.alternatives) : compared);
+    if (picked.size() < 2)  // one significant, or the best not significant (a route of rule 1's options)
       return fit_trial(*find(round, round.best), terms, ref, surface, state);
-    std::rotate(picks.begin(), best_pick, best_pick + 1);  // the best score first (equal scores: the round's best)
     std::vector<Trial> trials;
-    std::vector<double> bic, fitted_p;
+    for (const Candidate* c : picked) {
+      trials.push_back(fit_trial(*c, terms, ref, surface, state));
+      const Trial& t = trials.back();
+      round.fits.push_back({c->effect, t.fit.params.get(c->key, c->neutral), t.after.bic, at_neutral(t, *c),
+                            t.after.fitted.chi});
+    }
+    const int tried = compared >= 2 ? choose_among_fits(round, compared) : 0;  // else the best score
+    if (ask_alternatives) name_alternatives(round, tried);
+    say(contest_line(round, ask_alternatives));
+    return std::move(trials[static_cast<std::size_t>(tried)]);
+  }
+
+  // The visible candidates rule 4 (and rule 5) fit in full: the significant ones, up to `asked`,
+  // best scores first, the round's best first among equal scores. Empty where the best is not
+  // among them.
+  std::vector<const Candidate*> significant_picks(const Round& round, int asked) const {
+    std::vector<const Candidate*> visible;
+    std::vector<double> score, p_adjusted;
+    for (const Candidate& c : round.candidates)
+      if (c.visible) visible.push_back(&c), score.push_back(c.score.statistic), p_adjusted.push_back(c.p_adjusted);
+    std::vector<const Candidate*> picked;
+    for (int m : contenders(score, p_adjusted, def_.alpha, asked)) picked.push_back(visible[static_cast<std::size_t>(m)]);
+    const auto best = std::find_if(picked.begin(), picked.end(), [&](const Candidate* c) { return c->effect == round.best; });
+    if (best == picked.end()) return {};
+    std::rotate(picked.begin(), best, best + 1);
+    return picked;
+  }
+
+  // Rule 4 among the first `compared` of round.fits: sets round.best and round.rivals (the fits'
+  // rivals, then the score's rivals the fits did not reach); returns the winner's index.
+  int choose_among_fits(Round& round, int compared) const {
+    const std::size_t n = std::min(round.fits.size(), static_cast<std::size_t>(compared));
+    std::vector<double> bic;
     std::vector<bool> eligible;
-    for (int m : picks) {
-      const Candidate& c = *visible[static_cast<std::size_t>(m)];
-      trials.push_back(fit_trial(c, terms, ref, surface, state));
-      bic.push_back(trials.back().after.bic);
-      fitted_p.push_back(trials.back().after.fitted.chi.p);
-      eligible.push_back(!at_neutral(trials.back(), c));
-      round.fits.push_back({c.effect, trials.back().fit.params.get(c.key, c.neutral), bic.back(), !eligible.back(),
-                            trials.back().after.fitted.chi});
-    }
-    int tried = 0;  // the best score, unless rule 4 compares fits
-    if (compared >= 2) {
-      const std::size_t n = std::min(picks.size(), static_cast<std::size_t>(compared));
-      const FitChoice choice = choose_by_fit(std::vector<double>(bic.begin(), bic.begin() + n),
-                                             std::vector<bool>(eligible.begin(), eligible.begin() + n),
-                                             chi_square_quantile(1 - def_.alpha, 1));
-      std::vector<std::string> rivals;
-      for (int r : choice.rivals) rivals.push_back(round.fits[static_cast<std::size_t>(r)].effect);
-      for (const std::string& name : round.rivals)  // the score's rivals the fits did not reach
-        if (std::none_of(round.fits.begin(), round.fits.begin() + n,
-                         [&](const ContenderFit& f) { return f.effect == name; }))
-          rivals.push_back(name);
-      round.rivals = rivals;
-      tried = choice.winner;
-      round.best = round.fits[static_cast<std::size_t>(tried)].effect;
-    }
-    if (ask_alternatives)
-      for (int a : alternatives_not_excluded(fitted_p, eligible, tried, def_.alpha))
-        round.alternatives.push_back(round.fits[static_cast<std::size_t>(a)].effect);
+    for (std::size_t i = 0; i < n; ++i) bic.push_back(round.fits[i].bic), eligible.push_back(!round.fits[i].at_neutral);
+    const FitChoice choice = choose_by_fit(bic, eligible, chi_square_quantile(1 - def_.alpha, 1));
+    std::vector<std::string> rivals;
+    for (int r : choice.rivals) rivals.push_back(round.fits[static_cast<std::size_t>(r)].effect);
+    for (const std::string& name : round.rivals)
+      if (std::none_of(round.fits.begin(), round.fits.begin() + static_cast<std::ptrdiff_t>(n),
+                       [&](const ContenderFit& f) { return f.effect == name; }))
+        rivals.push_back(name);
+    round.rivals = rivals;
+    round.best = round.fits[static_cast<std::size_t>(choice.winner)].effect;
+    return choice.winner;
+  }
+
+  // Rule 5: round.alternatives, the fits other than the one tried that are not excluded.
+  void name_alternatives(Round& round, int tried) const {
+    std::vector<double> fitted_p;
+    std::vector<bool> eligible;
+    for (const ContenderFit& f : round.fits) fitted_p.push_back(f.fitted.p), eligible.push_back(!f.at_neutral);
+    for (int a : alternatives_not_excluded(fitted_p, eligible, tried, def_.alpha))
+      round.alternatives.push_back(round.fits[static_cast<std::size_t>(a)].effect);
+  }
+
+  std::string contest_line(const Round& round, bool ask_alternatives) const {
     std::vector<std::string> listed;
     for (const ContenderFit& f : round.fits)
       listed.push_back(fmt::format("{} {:.4g} (BIC {:.1f}, fitted chi2 p {:.3g}{})", f.effect, f.value, f.bic,
                                    f.fitted.p, f.at_neutral ? ", at neutral" : ""));
-    const auto significant = std::count_if(p_adjusted.begin(), p_adjusted.end(), [&](double p) { return p < def_.alpha; });
+    const auto significant = std::count_if(round.candidates.begin(), round.candidates.end(),
+                                           [&](const Candidate& c) { return c.visible && c.p_adjusted < def_.alpha; });
     std::string line = fmt::format("{} candidates significant, {} fitted in full: {}; tried: {}", significant,
-                                   picks.size(), fmt::join(listed, ", "), round.best);
+                                   round.fits.size(), fmt::join(listed, ", "), round.best);
     if (ask_alternatives)
       line += round.alternatives.empty()
                   ? "; no other, in its place, leaves the fitted points within the noise"
                   : fmt::format("; not excluded in its place (the fitted points within the noise with it instead): {}",
                                 fmt::join(round.alternatives, ", "));
-    say(line);
-    return std::move(trials[static_cast<std::size_t>(tried)]);
+    return line;
   }
 
   // fit_trial, then judge.
@@ -535,38 +523,6 @@ class Loop {
   int n_free_;
   const BaselineFit* base_ = nullptr;  // set by attribute()
 };
-
-}  // namespace
-
-namespace {
-
-// The model's share of the variance above which its replicates, not the data, hold the loop's tests
-// back. A planted effect's visibility scales as 1 - share of what a noiseless model would give:
-// at 20 % the model costs a fifth. Blind pass 15 at 6 model replicates identified 15 of 18 single
-// effects, at 12 all 18 when replayed (in-sample); the fresh pass 17 at 12 identified 15 of 18
-// (calibrate/README.md, "The model's own noise is part of every test", with the shares).
-constexpr double kModelNoiseShareNote = 0.2;
-
-// The count that would bring `share` down to `target` if the model's variance fell as 1/replicates.
-// It falls less in practice (blind pass 15 from 6 to 12: median share 0.31 -> 0.23, not 0.18), so this
-// is a lower bound. Within the data file's range [2, 1000].
-int replicates_for_share(double share, int model_replicates, double target) {
-  const double n = model_replicates * share / (1 - share) * (1 - target) / target;
-  if (!(n < 1000)) return 1000;  // share near 1 (and NaN) included
-  return std::max(model_replicates + 1, static_cast<int>(std::ceil(n)));
-}
-
-std::string model_noise_text(double share, int model_replicates) {
-  if (!std::isfinite(share)) return "the model's noise share: no fitted point has a valid model value at the baseline";
-  std::string s = fmt::format("the model's noise is {:.0f} % of the residual's variance at the baseline (median over the "
-                              "fitted points; {} model replicates per point)", 100 * share, model_replicates);
-  if (share > kModelNoiseShareNote)
-    s += fmt::format(": above {:.0f} %, more model replicates give every test more power (at least {} for {:.0f} %: "
-                     "--model-replicates or [model] replicates; README, Calibration)",
-                     100 * kModelNoiseShareNote, replicates_for_share(share, model_replicates, kModelNoiseShareNote),
-                     100 * kModelNoiseShareNote);
-  return s;
-}
 
 }  // namespace
 
