@@ -240,7 +240,8 @@ class Loop {
     const bool ask_alternatives = def_.alternatives > 0 && state.fitted.chi.p < def_.alpha;
     const std::vector<const Candidate*> picked =
         significant_picks(round, ask_alternatives ? std::max(compared, 1 + def_.alternatives) : compared);
-    if (picked.size() < 2)  // one significant, or the best not significant (a route of rule 1's options)
+    // At most one picked (one asked, or one significant), or the best not among them (a route of rule 1's options).
+    if (picked.size() < 2)
       return fit_trial(*find(round, round.best), terms, ref, surface, state);
     std::vector<Trial> trials;
     for (const Candidate* c : picked) {
@@ -299,6 +300,7 @@ class Loop {
       round.alternatives.push_back(round.fits[static_cast<std::size_t>(a)].effect);
   }
 
+  // The contest's log line: every full fit, the one tried and (rule 5) what is not excluded in its place.
   std::string contest_line(const Round& round, bool ask_alternatives) const {
     std::vector<std::string> listed;
     for (const ContenderFit& f : round.fits)

@@ -16,7 +16,7 @@ namespace gapflow {
 std::vector<std::string> shared_run_correlations(const DataFile& data, const BaselineFit& base);
 
 // The model's share of the variance at the baseline (fit.hpp, model_noise_share) in words, with the
-// replicates that would bring it below 20 % where it is above.
+// least number of replicates that would bring it to 20 % where it is above (a lower bound).
 std::string model_noise_text(double share, int model_replicates);
 
 }  // namespace gapflow
