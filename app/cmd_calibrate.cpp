@@ -166,7 +166,7 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
   o.calibrate->add_option("--alternatives", o.alternatives,
                           "Other significant candidates fitted in full beside the one tried: any that alone leaves the "
                           "fitted points within the noise is an alternative these data do not exclude, and the verdict "
-                          "says so (default 0: none; rule 5 of calibrate/decisions.hpp)")
+                          "says so (default 2; 0: none asked; rule 5 of calibrate/decisions.hpp)")
       ->check(CLI::Range(0, 9));
   o.calibrate->add_option("--decisive-score", o.decisive_score_p,
                           "Adjusted p below which the best candidate is tried even where the fitted chi2 is within "

@@ -52,8 +52,9 @@ struct CalibrationDef {
   int max_effects = 2;             // rounds of "add an effect"
   int contenders = 1;              // significant candidates fitted in full before one is tried (decisions.hpp, rule 4);
                                    // 1: the best score (blind passes 11-12: 28 of 36 identified with 1 and with 3)
-  int alternatives = 0;            // other significant candidates fitted in full to see whether they too, alone, leave
-                                   // the fitted points within the noise (decisions.hpp, rule 5; 0: none)
+  int alternatives = 2;            // other significant candidates fitted in full to see whether they too, alone, leave
+                                   // the fitted points within the noise (decisions.hpp, rule 5; 0: none; 2 from blind
+                                   // pass 23's pre-registered replay: 4 of 15 identifications qualified, ~1900 runs)
   double decisive_score_p = 0;     // a best score with adjusted p below this is tried even where the fitted chi^2 is
                                    // within the noise (decisions.hpp, rule 1's option; 0: never)
   bool held_out_route = false;     // a round also looks for an effect where the fitted points are within the noise but

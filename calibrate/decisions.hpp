@@ -76,9 +76,10 @@
 //    effect exactly when it did before (rule 1), and the chosen one meets rule 2. Not the
 //    default (CalibrationDef::contenders = 1): over blind passes 11 and 12 it identified no
 //    more effects (28 of 36 either way) for about 1.2-1.3 x the CPU.
-// 5. Whether these data exclude another effect in place of the one added (alternatives; option
-//    CalibrationDef::alternatives, off by default until a replay of blind pass 23 scores it:
-//    results/calibration-blind-pass23/ALTERNATIVES_PREREGISTRATION.md). Rules 1-4 rank the
+// 5. Whether these data exclude another effect in place of the one added (alternatives;
+//    CalibrationDef::alternatives, 2 by default since the pre-registered replay of blind pass 23,
+//    results/calibration-blind-pass23/ALTERNATIVES_PREREGISTRATION.md and README.md: nothing but
+//    rule 5 changed in 28 calibrations, 4 of 15 identifications qualified). Rules 1-4 rank the
 //    candidates against each other; none asks whether a rival, alone, would explain the data as
 //    well in absolute terms. Where the residual is only a little beyond the noise, several can: an
 //    effect outside the catalogue (blind pass 22's 4 /m quadratic drag) was added as size scatter
@@ -87,7 +88,8 @@
 //    full like the one tried, and those whose fit leaves the fitted points within the noise (chi^2
 //    p >= alpha: rule 1's own test, the one that ends the search) are alternatives these data do not
 //    exclude. The verdict then withholds the identity: "effect found; these data do not exclude
-//    another effect in its place". Not a choice: the effect tried, its size and whether it is kept
+//    another effect in its place" (followed by the drag's law reservation where that holds too).
+//    Not a choice: the effect tried, its size and whether it is kept
 //    are those of rules 1-4. Where the truth is a catalogue effect fitted so, it passes that test
 //    with probability about 1 - alpha unconditionally, less given that the round ran (the baseline's
 //    chi^2 failed, and the truth's fit shares that noise), least for the small effects the rule is
@@ -183,7 +185,7 @@ bool poor_fit(const VerdictEvidence& e);  // the fitted points after everything
 // beyond the noise" | "effect found" | "effect found, poor fit remains" | "effect found; the held-out
 // points are still beyond the noise" | "effect found; these data do not exclude another effect in its
 // place" | "effect found; the drag's law in the speed is not established: a drag of another law may be
-// acting" | "residual not attributed (--max-effects 0)" | ...
+// acting" | both reservations, in that order | "residual not attributed (--max-effects 0)" | ...
 std::string final_verdict(const VerdictEvidence& e);
 
 }  // namespace gapflow

@@ -572,6 +572,16 @@ class AlternativesReplayCompare(unittest.TestCase):
             done = subprocess.run(cmd + ["roll"], capture_output=True, text=True)
             self.assertIn("DIFFERS: the verdict changed otherwise than rule 5 allows", done.stdout)
             self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
+            # The drag's law reservation is kept after the rule's (pass 23's replay binary replaced it: passes too),
+            # and a plain "effect found" cannot gain it.
+            law = "; the drag's law in the speed is not established: a drag of another law may be acting"
+            for case, was, now in (("both", "effect found" + law, self.QUALIFIED + law),
+                                   ("old", "effect found" + law, self.QUALIFIED),
+                                   ("gained", "effect found", self.QUALIFIED + law)):
+                self.write(before, case, was, "linear_drag")
+                self.write(after, case, now, "linear_drag", ["rolling_contact"])
+            done = subprocess.run(cmd + ["both", "old", "gained"], capture_output=True, text=True)
+            self.assertIn("with differences beyond rule 5: 1 (gained)", done.stdout)
             # What rule 5 wrote must be what its fits give, and the fits rule 4 made must stay.
             rule4 = [{"effect": "rolling_contact", "bic": -10.0}]
             self.write(before, "r4", "effect found", "rolling_contact", fits=rule4)

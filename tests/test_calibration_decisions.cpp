@@ -274,9 +274,11 @@ TEST(FinalVerdict, AnEffectWithAlternativesNotExcludedWithholdsItsIdentityAfterT
   VerdictEvidence e{.effects_added = 1, .fitted_p_before = 0.00999, .fitted_p_after = 0.607, .held_out_n = 12,
                     .held_out_fresh_p = 0.979, .alternatives = true};
   EXPECT_EQ(final_verdict(e), "effect found; these data do not exclude another effect in its place");
-  // Which effect acts is said before how a drag depends on the speed.
+  // Both reservations where both hold: which effect acts, then how a drag depends on the speed.
   e.law_undetermined = true;
-  EXPECT_EQ(final_verdict(e), "effect found; these data do not exclude another effect in its place");
+  EXPECT_EQ(final_verdict(e),
+            "effect found; these data do not exclude another effect in its place; the drag's law in the speed is not "
+            "established: a drag of another law may be acting");
   e.alternatives = false;
   EXPECT_EQ(final_verdict(e),
             "effect found; the drag's law in the speed is not established: a drag of another law may be acting");
