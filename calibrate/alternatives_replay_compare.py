@@ -11,10 +11,10 @@ one contender: every fit but the one tried, not at neutral, fitted p >= 0.05), a
 those of its round less the effects added. The
 verdict may change only to "effect found; these data do not exclude another effect in its place",
 where AFTER names an alternative and BEFORE said "effect found" or added only the drag's law
-qualifier; that qualifier is then kept after the rule's (the binaries of blind pass 23's replay
-replaced it, so that wording passes too). One line per case, then the count of cases with other differences (exit 1 if any).
+qualifier; that qualifier is then kept after the rule's. With --pass23-wording the rule's wording
+alone may replace the qualifier, as the binaries of blind pass 23's replay (before 21de738) did. One line per case, then the count of cases with other differences (exit 1 if any).
 
-    /usr/bin/python3 calibrate/alternatives_replay_compare.py BEFORE AFTER [CASE ...]
+    /usr/bin/python3 calibrate/alternatives_replay_compare.py [--pass23-wording] BEFORE AFTER [CASE ...]
 """
 import sys
 
@@ -25,7 +25,8 @@ QUALIFIED = FOUND + "; these data do not exclude another effect in its place"
 LAW = "; the drag's law in the speed is not established: a drag of another law may be acting"
 # Verdicts rule 5 may qualify (the ones that come after the poor-fit and held-out flags), and what each may become.
 QUALIFIABLE = (FOUND, FOUND + LAW)
-QUALIFIED_AS = {FOUND: (QUALIFIED,), FOUND + LAW: (QUALIFIED + LAW, QUALIFIED)}
+QUALIFIED_AS = {FOUND: (QUALIFIED,), FOUND + LAW: (QUALIFIED + LAW,)}
+PASS23_WORDING = {FOUND: (QUALIFIED,), FOUND + LAW: (QUALIFIED,)}  # rule 5's wording replaced the law's
 
 
 def named(summary):
@@ -86,5 +87,9 @@ def describe(case, before, after):
 
 
 if __name__ == "__main__":
-    sys.exit(compare.main(sys.argv[1:], differences, verdict_change_allowed, describe, what="rule 5",
+    args = sys.argv[1:]
+    if "--pass23-wording" in args:
+        args.remove("--pass23-wording")
+        QUALIFIED_AS = PASS23_WORDING
+    sys.exit(compare.main(args, differences, verdict_change_allowed, describe, what="rule 5",
                           not_allowed="the verdict changed otherwise than rule 5 allows", doc=__doc__))

@@ -11,6 +11,9 @@
 # on a machine whose store holds only some calibrations' runs (a pass carried between machines, see
 # below), the ones it ran. A name with no twin in PASS is an error (exit 2).
 # e.g. studies/calibration_replay.sh results/calibration-blind-pass11 replay-one-contender 2 --contenders 1
+# The binary's defaults apply, not the pass's: builds from 21de738 on ask rule 5's alternatives (2) by
+# default, so a pass before 24 is its own loop again only with --alternatives 0 (its summaries'
+# "alternatives": 0 or absent), which is then part of the replay's record like any option.
 # Resumable: run again with the same binary and options, and the calibrations finished are kept and the
 # others continue on DIR/runs.sqlite (a copy of the pass's store, not committed). DIR made with another
 # binary or other options is refused (exit 2). Calibrations run one after another, each with JOBS

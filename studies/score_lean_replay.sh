@@ -48,6 +48,12 @@ else
   label="with --independent-signatures"
   replay_options+=(--independent-signatures)
 fi
+# Rule 5 as the pass ran it (summary.json "alternatives"; absent before the option: none asked), where
+# GAPFLOW knows the option: binaries from 21de738 on ask 2 by default, which a pass before 24 did not.
+if "$gapflow" calibrate --help 2>/dev/null | grep -q -- '--alternatives'; then
+  asked=$(/usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1])).get("alternatives", 0))' "$first_summary")
+  replay_options+=(--alternatives "$asked")
+fi
 # An OUT is calibrated with one set of options only (recorded in it; an OUT without the record was
 # made by the script before pass 20, with --independent-signatures alone).
 if [[ -d $out ]]; then

@@ -31,7 +31,7 @@ for r in replay-alternatives-off replay-alternatives; do /usr/bin/python3 calibr
 # A1a: the control (rule off, same binary) against the pass; A1b: the rule against the control.
 /usr/bin/python3 calibrate/alternatives_replay_compare.py $P $P/replay-alternatives-off > $P/replay-alternatives-off/compare.txt ||
   echo "A1a: the control differs from the pass: see $P/replay-alternatives-off/compare.txt"
-/usr/bin/python3 calibrate/alternatives_replay_compare.py $P/replay-alternatives-off $P/replay-alternatives \
+/usr/bin/python3 calibrate/alternatives_replay_compare.py --pass23-wording $P/replay-alternatives-off $P/replay-alternatives \
   > $P/replay-alternatives/compare.txt ||
   echo "A1b: differences beyond rule 5: see $P/replay-alternatives/compare.txt"
 echo scored

@@ -572,16 +572,20 @@ class AlternativesReplayCompare(unittest.TestCase):
             done = subprocess.run(cmd + ["roll"], capture_output=True, text=True)
             self.assertIn("DIFFERS: the verdict changed otherwise than rule 5 allows", done.stdout)
             self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
-            # The drag's law reservation is kept after the rule's (pass 23's replay binary replaced it: passes too),
-            # and a plain "effect found" cannot gain it.
+            # The drag's law reservation is kept after the rule's; replaced by it only with --pass23-wording (that
+            # replay's binary); never gained, and never left without the rule's where an alternative is named.
             law = "; the drag's law in the speed is not established: a drag of another law may be acting"
             for case, was, now in (("both", "effect found" + law, self.QUALIFIED + law),
                                    ("old", "effect found" + law, self.QUALIFIED),
-                                   ("gained", "effect found", self.QUALIFIED + law)):
+                                   ("gained", "effect found", self.QUALIFIED + law),
+                                   ("unqualified", "effect found" + law, "effect found" + law)):
                 self.write(before, case, was, "linear_drag")
                 self.write(after, case, now, "linear_drag", ["rolling_contact"])
-            done = subprocess.run(cmd + ["both", "old", "gained"], capture_output=True, text=True)
-            self.assertIn("with differences beyond rule 5: 1 (gained)", done.stdout)
+            cases = ["both", "old", "gained", "unqualified"]
+            done = subprocess.run(cmd + cases, capture_output=True, text=True)
+            self.assertIn("with differences beyond rule 5: 3 (old, gained, unqualified)", done.stdout)
+            done = subprocess.run(cmd[:2] + ["--pass23-wording"] + cmd[2:] + cases, capture_output=True, text=True)
+            self.assertIn("with differences beyond rule 5: 3 (both, gained, unqualified)", done.stdout)
             # What rule 5 wrote must be what its fits give, and the fits rule 4 made must stay.
             rule4 = [{"effect": "rolling_contact", "bic": -10.0}]
             self.write(before, "r4", "effect found", "rolling_contact", fits=rule4)

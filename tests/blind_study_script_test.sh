@@ -18,15 +18,19 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 # and a truth with nothing planted; `calibrate` writes a summary that found nothing.
 cat > "$work/gapflow" <<'STUB'
 #!/usr/bin/env bash
-# STUB_BINARY: new (knows --shared-signatures; default own seeds) or old (neither; default shared).
+# STUB_BINARY: new (knows --shared-signatures; default own seeds), old (neither; default shared) or
+# rule5 (as new, and asks rule 5's alternatives, 2 by default, recorded in its summaries).
 if [[ $* == *--help* ]]; then
-  [[ ${STUB_BINARY:-new} == new ]] && echo "  --independent-signatures,--shared-signatures{false}"
+  [[ ${STUB_BINARY:-new} != old ]] && echo "  --independent-signatures,--shared-signatures{false}"
+  [[ ${STUB_BINARY:-new} == rule5 ]] && echo "  --alternatives INT:INT in [0 - 9]"
   exit 0
 fi
 echo "$*" >> "$STUB_LOG"
 command=$1; shift
 own_seeds=false
-[[ ${STUB_BINARY:-new} == new ]] && own_seeds=true
+[[ ${STUB_BINARY:-new} != old ]] && own_seeds=true
+alternatives_field=""
+[[ ${STUB_BINARY:-new} == rule5 ]] && alternatives_field='"alternatives": 2, '
 [[ $* == *--independent-signatures* ]] && own_seeds=true
 [[ $* == *--shared-signatures* ]] && own_seeds=false
 out="" truth="" model_seed=1 replicates=10
@@ -36,6 +40,7 @@ while [[ $# -gt 0 ]]; do
     --truth) truth=$2; shift ;;
     --model-seed) model_seed=$2; shift ;;
     --replicates) replicates=$2; shift ;;
+    --alternatives) alternatives_field="\"alternatives\": $2, "; shift ;;
   esac
   shift
 done
@@ -56,8 +61,8 @@ else
   checks=""  # STUB_POINTS: a linear drag's check along the incline that sees a spread of 0.9
   [[ -n ${STUB_POINTS:-} ]] && checks='"form_checks": [{"effect": "linear_drag", "column": "incline_deg", "statistic": 2.0, "dof": 2, "rest_dof": 41, "p_adjusted": 0.5, "scale": 1.0, "spread_level": 0.01, "detectable_spread": 0.9}], '
   errors='{"n": 12, "rmse": 0.1, "rms_whitened": 1.0, "chi2": 12.0, "dof": 12, "p": 0.5, "invalid": 0}'
-  printf '{"effects": [], "verdict": "consistent with noise", "poor_fit": false, "held_out_beyond_noise": false, "before": {"fitted": %s, "held_out_fresh": %s}, "after": {"params": {"k": 0.3}, "fitted": %s, "held_out_fresh": %s}, "measured_free": [], "rounds": [], %s"independent_signatures": %s, "runs_simulated": 10, "runs_reused": 0, "run_seconds": 1.0, "wall_seconds": 1.0}\n' \
-    "$errors" "$errors" "$errors" "$errors" "$checks" "$own_seeds" > "$out/summary.json"
+  printf '{"effects": [], "verdict": "consistent with noise", "poor_fit": false, "held_out_beyond_noise": false, "before": {"fitted": %s, "held_out_fresh": %s}, "after": {"params": {"k": 0.3}, "fitted": %s, "held_out_fresh": %s}, "measured_free": [], "rounds": [], %s%s"independent_signatures": %s, "runs_simulated": 10, "runs_reused": 0, "run_seconds": 1.0, "wall_seconds": 1.0}\n' \
+    "$errors" "$errors" "$errors" "$errors" "$checks" "$alternatives_field" "$own_seeds" > "$out/summary.json"
 fi
 STUB
 chmod +x "$work/gapflow"
@@ -164,6 +169,17 @@ grep -q -- "--no-plots --held-out-route --shared-signatures$" "$work/log" || fai
 STUB_BINARY=old "$src/studies/score_lean_replay.sh" "$work/both" "$work/store.sqlite" "$work/lean-both-old" 1 null-2 \
   > /dev/null 2>&1 || true
 grep -q -- "--no-plots --held-out-route$" "$work/log" || fail "an old binary's replay of an own-seeds pass: $(cat "$work/log")"
+# Rule 5 as the pass ran it, where the replay's binary knows the option (and asks 2 by default): a
+# pass from before it (no record) is replayed with --alternatives 0, one that asked 2 with 2.
+: > "$work/log"
+STUB_BINARY=rule5 "$src/studies/score_lean_replay.sh" "$work/own" "$work/store.sqlite" "$work/lean-own-rule5" 1 null-2 \
+  > /dev/null 2>&1 || true
+grep -q -- "--no-plots --shared-signatures --alternatives 0$" "$work/log" || fail "a pass before rule 5 replayed by a binary with it: $(cat "$work/log")"
+STUB_BINARY=rule5 MODEL_SEEDS=design blind "$work/rule5" 1 16000 $design || fail "rule-5 pass: $(cat "$work/stderr")"
+: > "$work/log"
+STUB_BINARY=rule5 "$src/studies/score_lean_replay.sh" "$work/rule5" "$work/store.sqlite" "$work/lean-rule5" 1 null-2 \
+  > /dev/null 2>&1 || true
+grep -q -- "--no-plots --shared-signatures --alternatives 2$" "$work/log" || fail "a pass with rule 5 replayed: $(cat "$work/log")"
 # A replay's OUT is not resumed with other options (here: another pass's).
 set +e
 "$src/studies/score_lean_replay.sh" "$work/own" "$work/store.sqlite" "$work/lean-both" 1 null-2 > /dev/null 2> "$work/stderr"
