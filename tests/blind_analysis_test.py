@@ -361,6 +361,30 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("toward: 1 interval(s); free parameter more than 2 se from its measurement in 0; "
                       "median |distance| 1.00 se", out)
 
+    def test_interval_coverage_counts_planted_keys_and_the_miss_in_standard_errors(self):
+        code, out, _ = run("interval_coverage.py", self.pass_dir)
+        self.assertEqual(code, 0)
+        # drag-low: [2.5, 2.8] around 2.6 for a planted 3.0: the half toward it 0.2 = 1.96 se, the miss 0.4 = 3.92 se.
+        # The gap offset of null-1 and rolling-high's linear drag were not planted: not counted.
+        self.assertIn("| particles.drag_per_s | 1 | 0 (0 %; 0-", out)
+        self.assertIn("| 1 / 0 | 3.92 | - |", out)
+        self.assertIn("| all | 1 | 0 (0 %;", out)
+        self.assertNotIn("gap_offset", out)
+        self.assertEqual(run("interval_coverage.py", self.pass_dir / "nothing")[0], 2)
+        # From 20 intervals on, the widening that holds 95 % of the truths: 19 hold (0.5 se), one misses by 3.92 se.
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp)
+            (folder / "truth").mkdir()
+            for k in range(20):
+                case = f"drag-{k}"
+                (folder / "truth" / f"{case}.json").write_text(json.dumps(truth(case, [DRAG])))
+                (folder / case).mkdir()
+                value = 2.6 if k == 0 else 2.95
+                effect = added("linear_drag", DRAG["key"], value, value - 0.2, value + 0.2)
+                (folder / case / "summary.json").write_text(json.dumps(summary([effect], "effect found")))
+            code, out, _ = run("interval_coverage.py", folder)
+            self.assertIn("| particles.drag_per_s | 20 | 19 (95 %; 75-100 %) | 1 / 0 | 0.49 | 2.0 |", out)
+
     def test_decisive_rounds_finds_the_stopped_round_once(self):
         # Once: the replay of spin-high beside the pass is not counted.
         code, out, _ = run("decisive_rounds.py", "1e-3", self.pass_dir)
