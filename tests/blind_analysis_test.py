@@ -370,6 +370,8 @@ class BlindAnalysis(unittest.TestCase):
         self.assertIn("| 1 / 0 | 3.92 | - |", out)
         self.assertIn("| all | 1 | 0 (0 %;", out)
         self.assertNotIn("gap_offset", out)
+        # Its size 2.6 for 3.0 (0.87 of the planted departure from 0), the friction fitted 0.42 for 0.40.
+        self.assertIn("| particles.drag_per_s | 1 | 0.87 | +0.020 | - |", out)
         self.assertEqual(run("interval_coverage.py", self.pass_dir / "nothing")[0], 2)
         # From 20 intervals on, the widening that holds 95 % of the truths: 19 hold (0.5 se), one misses by 3.92 se.
         with tempfile.TemporaryDirectory() as tmp:
@@ -381,9 +383,13 @@ class BlindAnalysis(unittest.TestCase):
                 (folder / case).mkdir()
                 value = 2.6 if k == 0 else 2.95
                 effect = added("linear_drag", DRAG["key"], value, value - 0.2, value + 0.2)
-                (folder / case / "summary.json").write_text(json.dumps(summary([effect], "effect found")))
+                s = summary([effect], "effect found")
+                if k == 0:  # the one read small has the friction read high: a trade-off, correlation -1
+                    s["after"]["params"]["particles.friction_particle"] = 0.50
+                (folder / case / "summary.json").write_text(json.dumps(s))
             code, out, _ = run("interval_coverage.py", folder)
             self.assertIn("| particles.drag_per_s | 20 | 19 (95 %; 75-100 %) | 1 / 0 | 0.49 | 2.0 |", out)
+            self.assertIn("| particles.drag_per_s | 20 | 0.98 | +0.020 | -1.00 |", out)
 
     def test_decisive_rounds_finds_the_stopped_round_once(self):
         # Once: the replay of spin-high beside the pass is not counted.
