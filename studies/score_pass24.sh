@@ -26,6 +26,7 @@ passes=$(printf 'results/calibration-blind-pass%s ' 10 12 13 14 15 16 17 18 19 2
 /usr/bin/python3 calibrate/visibility_ceiling.py --by-case $passes > $P/pooled_passes_10_12-21_23-24.txt
 /usr/bin/python3 calibrate/visibility_ceiling.py --gates --by-case $passes > $P/pooled_gates_10_12-21_23-24.txt
 /usr/bin/python3 calibrate/blind_summary.py $P/replay-alternatives-off > /dev/null
+/usr/bin/python3 calibrate/pass_counts.py $P $P/replay-alternatives-off > $P/pass_counts.txt   # expectations 8, 9
 # Expectation 10: the control (rule off) as BEFORE, the pass (rule on) as AFTER.
 /usr/bin/python3 calibrate/alternatives_replay_compare.py $P/replay-alternatives-off $P > $P/replay-alternatives-off/compare.txt ||
   echo "expectation 10: differences beyond rule 5: see $P/replay-alternatives-off/compare.txt"

@@ -391,6 +391,18 @@ class BlindAnalysis(unittest.TestCase):
             self.assertIn("| particles.drag_per_s | 20 | 19 (95 %; 75-100 %) | 1 / 0 | 0.49 | 2.0 |", out)
             self.assertIn("| particles.drag_per_s | 20 | 0.98 | +0.020 | -1.00 |", out)
 
+    def test_pass_counts_gives_the_cost_and_the_wording_of_the_identifications(self):
+        code, out, _ = run("pass_counts.py", self.pass_dir)
+        self.assertEqual(code, 0)
+        # drag-low, rolling-high and null-1 added an effect, 1000 runs simulated each (every twin 1000).
+        self.assertIn("6 calibrations, 3 added an effect", out)
+        self.assertIn("median 1000 (1000-1000); in all 6000", out)
+        # drag-low says plain "effect found", rolling-high the form check's flag; no rule 5 asked.
+        self.assertIn('single planted effects identified: 2; with an alternative named (rule 5): 0; '
+                      'with a plain "effect found": 1', out)
+        self.assertNotIn("process CPU", out)  # summaries without cpu_seconds
+        self.assertEqual(run("pass_counts.py", self.pass_dir / "nothing")[0], 2)
+
     def test_decisive_rounds_finds_the_stopped_round_once(self):
         # Once: the replay of spin-high beside the pass is not counted.
         code, out, _ = run("decisive_rounds.py", "1e-3", self.pass_dir)
@@ -713,6 +725,12 @@ class AlternativesReplayCompare(unittest.TestCase):
                           "CPU seconds only where the cores were not shared)", report)
             self.assertIn("* CPU the calibrations' processes used (every thread, the runs they simulated; a store "
                           "shared between twins lowers it): median 115 CPU-s (range 100-130)", report)
+            # calibrate/pass_counts.py: of the two identified, drag-low qualified by rule 5, spin-high plain.
+            code, out, err = run("pass_counts.py", folder)
+            self.assertEqual(code, 0, err)
+            self.assertIn('single planted effects identified: 2; with an alternative named (rule 5): 1 (drag-low); '
+                          'with a plain "effect found": 1', out)
+            self.assertIn("process CPU: 460 s in all; median per calibration with an effect 115 s", out)
             # Summaries made without the option: no such lines, an empty column.
             for case in cases:
                 s = json.loads((folder / case / "summary.json").read_text())
