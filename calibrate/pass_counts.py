@@ -4,8 +4,8 @@ cases.csv (calibrate/blind_summary.py makes it):
 
     /usr/bin/python3 calibrate/pass_counts.py PASS_OR_REPLAY [...]
 
-For each folder: the runs simulated (beyond what its store held) per calibration that added an
-effect, median, range and count, and in all; the calibrations' own process CPU (cases.csv
+For each folder: how many calibrations added an effect; the runs simulated (beyond what its store
+held) per calibration that added one, median and range, and over every calibration; the calibrations' own process CPU (cases.csv
 process_cpu_s, where the binary records it) and wall, in all and median per calibration with an
 effect; and of the single planted effects identified, those whose verdict names an alternative
 (rule 5) and those with a plain "effect found" (no reservation of any kind).
@@ -30,13 +30,13 @@ def counts(folder):
     simulated = sorted(int(r["runs_simulated"]) for r in added if r["runs_simulated"])
     if simulated:
         lines.append(f"  runs simulated per calibration that added an effect: median {statistics.median(simulated):.0f} "
-                     f"({simulated[0]}-{simulated[-1]}); in all {sum(int(r['runs_simulated'] or 0) for r in rows)}")
+                     f"({simulated[0]}-{simulated[-1]}); over every calibration {sum(int(r['runs_simulated'] or 0) for r in rows)}")
     for field, what in (("process_cpu_s", "process CPU"), ("wall_s", "wall")):
         every = [number(r, field) for r in rows]
         if every and all(v is not None for v in every):
             with_effect = [number(r, field) for r in added]
             median = f"; median per calibration with an effect {statistics.median(with_effect):.0f} s" if with_effect else ""
-            lines.append(f"  {what}: {sum(every):.0f} s in all{median}")
+            lines.append(f"  {what}: {sum(every):.0f} s over every calibration{median}")
     single = [r for r in rows if r["truth"] not in NOT_SINGLE and r["identified"] == "True"]
     named = [r["case"] for r in single if any(a not in ("", "none") for a in r.get("alternatives", "").split("; "))]
     plain = [r["case"] for r in single if r["verdict"] == "effect found"]

@@ -373,7 +373,8 @@ class BlindAnalysis(unittest.TestCase):
         # Its size 2.6 for 3.0 (0.87 of the planted departure from 0), the friction fitted 0.42 for 0.40.
         self.assertIn("| particles.drag_per_s | 1 | 0.87 | +0.020 | - |", out)
         self.assertEqual(run("interval_coverage.py", self.pass_dir / "nothing")[0], 2)
-        # From 20 intervals on, the widening that holds 95 % of the truths: 19 hold (0.5 se), one misses by 3.92 se.
+        # From 20 intervals on, the widening that holds 95 % of the truths: 18 hold (0.49 se), two miss by 3.92
+        # and 5.88 se; the 95th percentile is the 19th of 20 (3.92 / 1.96), not the largest.
         with tempfile.TemporaryDirectory() as tmp:
             folder = Path(tmp)
             (folder / "truth").mkdir()
@@ -381,27 +382,51 @@ class BlindAnalysis(unittest.TestCase):
                 case = f"drag-{k}"
                 (folder / "truth" / f"{case}.json").write_text(json.dumps(truth(case, [DRAG])))
                 (folder / case).mkdir()
-                value = 2.6 if k == 0 else 2.95
+                value = {0: 2.6, 1: 2.4}.get(k, 2.95)
                 effect = added("linear_drag", DRAG["key"], value, value - 0.2, value + 0.2)
                 s = summary([effect], "effect found")
-                if k == 0:  # the one read small has the friction read high: a trade-off, correlation -1
+                if k < 2:  # the ones read small have the friction read high: a trade-off
                     s["after"]["params"]["particles.friction_particle"] = 0.50
                 (folder / case / "summary.json").write_text(json.dumps(s))
+            # Rolling resistance, neutral 0.001, planted 0.002: read 0.0015 (half the departure), its interval
+            # ending at the truth (held; 1.96 se from the size).
+            (folder / "truth" / "roll.json").write_text(json.dumps(truth("roll", [ROLL])))
+            (folder / "roll").mkdir()
+            roll = added("rolling_resistance", ROLL["key"], 0.0015, 0.0012, 0.002, neutral=0.001)
+            (folder / "roll" / "summary.json").write_text(json.dumps(summary([roll], "effect found")))
             code, out, _ = run("interval_coverage.py", folder)
-            self.assertIn("| particles.drag_per_s | 20 | 19 (95 %; 75-100 %) | 1 / 0 | 0.49 | 2.0 |", out)
-            self.assertIn("| particles.drag_per_s | 20 | 0.98 | +0.020 | -1.00 |", out)
+            self.assertIn("| particles.drag_per_s | 20 | 18 (90 %; 68-99 %) | 2 / 0 | 0.49 | 2.0 |", out)
+            # Shares 0.87, 0.80 and 18 x 0.98: the median 0.98 (their mean 0.97).
+            self.assertIn("| particles.drag_per_s | 20 | 0.98 | +0.020 | -0.97 |", out)
+            self.assertIn("| particles.rolling_resistance | 1 | 1 (100 %; 3-100 %) | 0 / 0 | 1.96 | - |", out)
+            self.assertIn("| particles.rolling_resistance | 1 | 0.50 | +0.020 | - |", out)
+            self.assertIn("left out: planted values at neutral (no share): 0", out)
 
     def test_pass_counts_gives_the_cost_and_the_wording_of_the_identifications(self):
         code, out, _ = run("pass_counts.py", self.pass_dir)
         self.assertEqual(code, 0)
         # drag-low, rolling-high and null-1 added an effect, 1000 runs simulated each (every twin 1000).
         self.assertIn("6 calibrations, 3 added an effect", out)
-        self.assertIn("median 1000 (1000-1000); in all 6000", out)
+        self.assertIn("median 1000 (1000-1000); over every calibration 6000", out)
         # drag-low says plain "effect found", rolling-high the form check's flag; no rule 5 asked.
         self.assertIn('single planted effects identified: 2; with an alternative named (rule 5): 0; '
                       'with a plain "effect found": 1', out)
         self.assertNotIn("process CPU", out)  # summaries without cpu_seconds
         self.assertEqual(run("pass_counts.py", self.pass_dir / "nothing")[0], 2)
+        # The medians are over the calibrations that added an effect, the sums over every one.
+        with tempfile.TemporaryDirectory() as tmp:
+            fields = ["case", "truth", "added", "identified", "verdict", "alternatives", "runs_simulated",
+                      "process_cpu_s", "wall_s"]
+            rows = [["a", "linear_drag", "x=1", "True", "effect found", "none", 100, 10, 5],
+                    ["b", "linear_drag", "x=2", "True", "effect found", "none", 300, 30, 7],
+                    ["c", "none", "", "", "consistent with noise", "none", 5000, 500, 9]]
+            with open(Path(tmp) / "cases.csv", "w", newline="") as f:
+                csv.writer(f).writerows([fields] + rows)
+            code, out, _ = run("pass_counts.py", tmp)
+            self.assertIn("3 calibrations, 2 added an effect", out)
+            self.assertIn("median 200 (100-300); over every calibration 5400", out)
+            self.assertIn("process CPU: 540 s over every calibration; median per calibration with an effect 20 s", out)
+            self.assertIn("wall: 21 s over every calibration; median per calibration with an effect 6 s", out)
 
     def test_decisive_rounds_finds_the_stopped_round_once(self):
         # Once: the replay of spin-high beside the pass is not counted.
@@ -730,7 +755,7 @@ class AlternativesReplayCompare(unittest.TestCase):
             self.assertEqual(code, 0, err)
             self.assertIn('single planted effects identified: 2; with an alternative named (rule 5): 1 (drag-low); '
                           'with a plain "effect found": 1', out)
-            self.assertIn("process CPU: 460 s in all; median per calibration with an effect 115 s", out)
+            self.assertIn("process CPU: 460 s over every calibration; median per calibration with an effect 115 s", out)
             # Summaries made without the option: no such lines, an empty column.
             for case in cases:
                 s = json.loads((folder / case / "summary.json").read_text())
