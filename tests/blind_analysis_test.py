@@ -11,7 +11,9 @@ that got an effect, the interval that misses toward neutral, the round a --decis
 """
 import csv
 import json
+import math
 import os
+import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -472,6 +474,48 @@ class BlindAnalysis(unittest.TestCase):
         self.assertEqual(run("decisive_rounds.py", "1e-4", empty)[0], 2)
         self.assertEqual(run("oracle_scale.py", empty)[0], 2)
 
+
+
+class PairedShift(unittest.TestCase):
+    """studies/effects/paired_shift.py: an effect's paired shift of ln J_mid and its dependence on a free parameter."""
+
+    def store(self, path):
+        db = sqlite3.connect(path)
+        db.execute("create table runs (series text, axes_json text, replicate integer, j_mid real, n_clogs integer)")
+        noise = [0.01, -0.01, 0.02, -0.02]  # each replicate's own departure of the moved run
+        for f in (0.3, 0.5):
+            for s in (0.0, 1.0):
+                for r in range(4):
+                    # ln J = 3 + r/10 - f - 0.2 s (1 + f): the shift -0.2 s (1 + f), 0.04 more negative at 0.5.
+                    ln_j = 3 + r / 10 - f - 0.2 * s * (1 + f) + (noise[r] * f if s else 0)
+                    db.execute("insert into runs values (?, ?, ?, ?, ?)",
+                               ("W/d 4.5", json.dumps({"f": f, "s": s}), r, math.exp(ln_j), int(r == 0 and s == 0)))
+        db.commit()
+        db.close()
+
+    def test_the_shift_and_its_change_with_the_free_parameter(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "runs.sqlite"
+            self.store(path)
+            done = subprocess.run([sys.executable, str(STUDIES / "effects" / "paired_shift.py"), str(path), "f", "s"],
+                                  capture_output=True, text=True)
+            self.assertEqual(done.returncode, 0, done.stderr)
+            self.assertIn("W/d 4.5: 16 runs, 2 with a clog, 0 without J_mid;", done.stdout)
+            # The replicates' own level r/10 is shared by each pair: correlated.
+            self.assertIn("pairs' correlation of ln J_mid (each size against its neutral, every free value): +0.9", done.stdout)
+            # At f 0.3: -0.26 (noise 0.003 x (1, -1, 2, -2): mean 0, se sqrt(10/3) x 0.003 / 2 = 0.0027).
+            self.assertIn("| 0.3 | -0.2600 ± 0.0027 |", done.stdout)
+            self.assertIn("| 0.5 | -0.3000 ± 0.0046 |", done.stdout)
+            # The interaction: -0.04, its noise 0.002 x (1, -1, 2, -2) (se 0.0018): t -21.9, +15 % of -0.26.
+            self.assertIn("s 1: shift at f 0.5 less at 0.3: -0.0400 ± 0.0018 (t -21.9; +15 % of the shift at 0.3)",
+                          done.stdout)
+            self.assertIn("f 0.3 -> 0.5 at s 0: ln J_mid -0.2000 ± 0.0000", done.stdout)
+            # -0.26 as a move of f, whose slope is -1: +0.26 (its error the shift's alone, 0.0027).
+            self.assertIn("s 1 at f 0.3 acts on ln J_mid as f moved by +0.260 ± 0.003", done.stdout)
+            done = subprocess.run([sys.executable, str(STUDIES / "effects" / "paired_shift.py"), str(path), "f", "x"],
+                                  capture_output=True, text=True)
+            self.assertEqual(done.returncode, 2)
+            self.assertIn("a run without f or x in its axes", done.stderr)
 
 
 class CarriedWallTime(unittest.TestCase):
