@@ -10,10 +10,12 @@ that got an effect, the interval that misses toward neutral, the round a --decis
     /usr/bin/python3 tests/blind_analysis_test.py
 """
 import csv
+import importlib.util
 import json
 import math
 import os
 import sqlite3
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -479,43 +481,78 @@ class BlindAnalysis(unittest.TestCase):
 class PairedShift(unittest.TestCase):
     """studies/effects/paired_shift.py: an effect's paired shift of ln J_mid and its dependence on a free parameter."""
 
-    def store(self, path):
+    NOISE = [0.01, -0.01, 0.02, -0.02]  # each replicate's own departure of the moved runs (times f)
+    NEUTRAL = [0.004, 0.0, -0.004, 0.008]  # ... and of the neutral runs at f 0.3 (shared by shift and slope)
+
+    def ln_j(self, f, s, r):
+        """ln J = 3 + r/10 - f - 0.2 s (1 + f), plus the replicates' departures: the shift -0.2 s (1 + f)."""
+        return (3 + r / 10 - f - 0.2 * s * (1 + f) + (self.NOISE[r] * f * s)
+                + (self.NEUTRAL[r] if s == 0 and f == 0.3 else 0))
+
+    def store(self, path, model="2d", extra_model=None):
         db = sqlite3.connect(path)
-        db.execute("create table runs (series text, axes_json text, replicate integer, j_mid real, n_clogs integer)")
-        noise = [0.01, -0.01, 0.02, -0.02]  # each replicate's own departure of the moved run
+        db.execute("create table runs (series text, axes_json text, replicate integer, j_mid real, n_clogs integer, "
+                   "model text)")
         for f in (0.3, 0.5):
-            for s in (0.0, 1.0):
+            for s in (0.0, 0.5, 1.0):
                 for r in range(4):
-                    # ln J = 3 + r/10 - f - 0.2 s (1 + f): the shift -0.2 s (1 + f), 0.04 more negative at 0.5.
-                    ln_j = 3 + r / 10 - f - 0.2 * s * (1 + f) + (noise[r] * f if s else 0)
-                    db.execute("insert into runs values (?, ?, ?, ?, ?)",
-                               ("W/d 4.5", json.dumps({"f": f, "s": s}), r, math.exp(ln_j), int(r == 0 and s == 0)))
+                    db.execute("insert into runs values (?, ?, ?, ?, ?, ?)",
+                               ("W/d 4.5", json.dumps({"f": f, "s": s}), r, math.exp(self.ln_j(f, s, r)),
+                                int(r == 0 and s == 0), model))
+        if extra_model:
+            db.execute("insert into runs values ('W/d 4.5', '{\"f\": 0.3, \"s\": 0}', 9, 1.0, 0, ?)", (extra_model,))
         db.commit()
         db.close()
+
+    def run_script(self, path, *keys):
+        return subprocess.run([sys.executable, str(STUDIES / "effects" / "paired_shift.py"), str(path), *keys],
+                              capture_output=True, text=True)
 
     def test_the_shift_and_its_change_with_the_free_parameter(self):
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "runs.sqlite"
             self.store(path)
-            done = subprocess.run([sys.executable, str(STUDIES / "effects" / "paired_shift.py"), str(path), "f", "s"],
-                                  capture_output=True, text=True)
+            done = self.run_script(path, "f", "s")
             self.assertEqual(done.returncode, 0, done.stderr)
-            self.assertIn("W/d 4.5: 16 runs, 2 with a clog, 0 without J_mid;", done.stdout)
-            # The replicates' own level r/10 is shared by each pair: correlated.
-            self.assertIn("pairs' correlation of ln J_mid (each size against its neutral, every free value): +0.9", done.stdout)
-            # At f 0.3: -0.26 (noise 0.003 x (1, -1, 2, -2): mean 0, se sqrt(10/3) x 0.003 / 2 = 0.0027).
-            self.assertIn("| 0.3 | -0.2600 ± 0.0027 |", done.stdout)
-            self.assertIn("| 0.5 | -0.3000 ± 0.0046 |", done.stdout)
-            # The interaction: -0.04, its noise 0.002 x (1, -1, 2, -2) (se 0.0018): t -21.9, +15 % of -0.26.
-            self.assertIn("s 1: shift at f 0.5 less at 0.3: -0.0400 ± 0.0018 (t -21.9; +15 % of the shift at 0.3)",
+            self.assertIn("W/d 4.5: 24 runs, 2 with a clog, 0 without J_mid;", done.stdout)
+            self.assertIn("| 0.3 | 1 of 4 | 0 of 4 | 0 of 4 |", done.stdout)  # replicate 0 at neutral clogs
+            # Each replicate's shifts, recomputed here; the table's cells and the interaction from them.
+            shift = {(f, s): [self.ln_j(f, s, r) - self.ln_j(f, 0.0, r) for r in range(4)]
+                     for f in (0.3, 0.5) for s in (0.5, 1.0)}
+            se = {k: statistics.stdev(v) / 2 for k, v in shift.items()}
+            self.assertIn(f"| 0.3 | {statistics.mean(shift[(0.3, 0.5)]):+.4f} ± {se[(0.3, 0.5)]:.4f} | "
+                          f"{statistics.mean(shift[(0.3, 1.0)]):+.4f} ± {se[(0.3, 1.0)]:.4f} |", done.stdout)
+            self.assertIn("| 0.5 | -0.1500 ± 0.0023 | -0.3000 ± 0.0046 |", done.stdout)
+            d = [b - a for a, b in zip(shift[(0.3, 1.0)], shift[(0.5, 1.0)])]
+            self.assertIn(f"s 1: shift at f 0.5 less at 0.3: {statistics.mean(d):+.4f} ± {statistics.stdev(d) / 2:.4f}",
                           done.stdout)
-            self.assertIn("f 0.3 -> 0.5 at s 0: ln J_mid -0.2000 ± 0.0000", done.stdout)
-            # -0.26 as a move of f, whose slope is -1: +0.26 (its error the shift's alone, 0.0027).
-            self.assertIn("s 1 at f 0.3 acts on ln J_mid as f moved by +0.260 ± 0.003", done.stdout)
-            done = subprocess.run([sys.executable, str(STUDIES / "effects" / "paired_shift.py"), str(path), "f", "x"],
-                                  capture_output=True, text=True)
+            # The largest size as a move of f: its error by the replicates' linearised ratio, which carries the
+            # covariance of shift and slope (both subtract the neutral runs at 0.3).
+            slope = [(self.ln_j(0.5, 0.0, r) - self.ln_j(0.3, 0.0, r)) / 0.2 for r in range(4)]
+            a, b = statistics.mean(shift[(0.3, 1.0)]), statistics.mean(slope)
+            linear = [x / b - a * y / b ** 2 for x, y in zip(shift[(0.3, 1.0)], slope)]
+            self.assertIn(f"s 1 at f 0.3 acts on ln J_mid as f moved by {a / b:+.3f} ± {statistics.stdev(linear) / 2:.3f}",
+                          done.stdout)
+            self.assertIn("s 1 at f 0.5 acts on ln J_mid as f moved by", done.stdout)
+            # The replicates' own level r/10 is shared by each pair: +1 within the cells.
+            self.assertIn("pairs' correlation of ln J_mid within each cell (each size against its neutral): +1.00",
+                          done.stdout)
+            done = self.run_script(path, "f", "x")
             self.assertEqual(done.returncode, 2)
             self.assertIn("a run without f or x in its axes", done.stderr)
+            mixed = Path(tmp) / "mixed.sqlite"
+            self.store(mixed, extra_model="3d")
+            done = self.run_script(mixed, "f", "s")
+            self.assertEqual(done.returncode, 2)
+            self.assertIn("holds runs of 2 models (2d, 3d); allowed: one", done.stderr)
+
+    def test_the_pairs_correlation_is_taken_within_each_cell(self):
+        # Two cells whose means differ by 10: pooled, the pairs look correlated (+0.98); within each, -1.
+        spec = importlib.util.spec_from_file_location("paired_shift", STUDIES / "effects" / "paired_shift.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        cells = [[(0.0, 1.0), (1.0, 0.0)], [(10.0, 11.0), (11.0, 10.0)]]
+        self.assertAlmostEqual(module.within_cell_correlation(cells), -1.0)
 
 
 class CarriedWallTime(unittest.TestCase):
