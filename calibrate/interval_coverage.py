@@ -15,7 +15,9 @@ factor the intervals would need to be widened by to hold 95 % of the truths (the
 |z| over 1.96, from 20 intervals on; "inf" where a miss has no half on the truth's side, the fitted
 size at its range's end). A second table sets the size read (its departure from neutral over the
 planted one: 1 exact, below 1 toward neutral) against the free parameter's fitted excess over its
-truth (the particle friction in the blind study), with their Pearson correlation (from 5 sizes on).
+truth (the particle friction in the blind study), with their Pearson correlation (from 5 sizes on),
+and the size against the free parameter's measurement beside the data less its truth (truth.json
+"measured"; drawn with the twin, before any fit).
 The last lines count what was left out: effects added without an interval, planted values at
 neutral (no share), twins with other than one free parameter (no excess).
 
@@ -53,12 +55,16 @@ def intervals(pass_dirs, left_out):
             if not os.path.exists(truth_file):
                 continue
             with open(truth_file) as f:
-                planted = json.load(f)["planted"]
+                truth_json = json.load(f)
+            planted = truth_json["planted"]
             with open(summary) as f:
                 s = json.load(f)
             free = {p["key"]: p["value"] for p in planted if p["name"] == "free"}
             fitted = s.get("after", {}).get("params", {})
             excess = [fitted[k] - v for k, v in free.items() if k in fitted]
+            # The free parameter's measurement beside the data less its truth: drawn before any fit.
+            measured = truth_json.get("measured", {})
+            measurement_error = [measured[k] - v for k, v in free.items() if k in measured]
             effects = {p["key"]: (p["value"], p["neutral"]) for p in planted if p["name"] != "free"}
             for e in s["effects"]:
                 if e["key"] not in effects:
@@ -74,7 +80,8 @@ def intervals(pass_dirs, left_out):
                 out.setdefault(e["key"], []).append({
                     "side": side_of(e, truth, neutral), "z": z_of(e, truth),
                     "share": (e["value"] - neutral) / (truth - neutral) if truth != neutral else None,
-                    "free_excess": excess[0] if len(excess) == 1 else None})
+                    "free_excess": excess[0] if len(excess) == 1 else None,
+                    "measurement_error": measurement_error[0] if len(measurement_error) == 1 else None})
     return out
 
 
@@ -108,17 +115,28 @@ def coverage_line(name, entries):
             f"{toward} / {n - held - toward} | {statistics.median(zs):.2f} | {factor} |")
 
 
+def correlation_text(entries, field):
+    """Pearson correlation of the share with `field` over the sizes that have both (from 5 on; "-" below)."""
+    pairs = [(i["share"], i[field]) for i in entries if i["share"] is not None and i.get(field) is not None]
+    if len(pairs) >= MIN_FOR_CORRELATION and len({x for x, _ in pairs}) > 1 and len({y for _, y in pairs}) > 1:
+        return f"{statistics.correlation([x for x, _ in pairs], [y for _, y in pairs]):+.2f}"
+    return "-"
+
+
 def trade_off_line(name, entries):
     """The size read against the free parameter's excess: a size that trades off against the free parameter
-    comes out small where the free parameter comes out high (a negative correlation)."""
+    comes out small where the free parameter comes out high (a negative correlation). Both are outputs of
+    one fit; the measurement's error is not (drawn with the twin), so a correlation with it says which
+    way the trade runs: a measurement that happened to be high drew the free parameter up and the size
+    down."""
     shares = [i["share"] for i in entries if i["share"] is not None]
-    pairs = [(i["share"], i["free_excess"]) for i in entries if i["share"] is not None and i["free_excess"] is not None]
-    r = "-"
-    if len(pairs) >= MIN_FOR_CORRELATION and len({x for x, _ in pairs}) > 1 and len({y for _, y in pairs}) > 1:
-        r = f"{statistics.correlation([x for x, _ in pairs], [y for _, y in pairs]):+.2f}"
-    excess = f"{statistics.median(y for _, y in pairs):+.3f}" if pairs else "-"
+    excesses = [i["free_excess"] for i in entries if i["share"] is not None and i["free_excess"] is not None]
+    errors = [i["measurement_error"] for i in entries if i["share"] is not None and i.get("measurement_error") is not None]
+    excess = f"{statistics.median(excesses):+.3f}" if excesses else "-"
+    error = f"{statistics.median(errors):+.3f}" if errors else "-"
     share = f"{statistics.median(shares):.2f}" if shares else "-"
-    return f"| {name} | {len(shares)} | {share} | {excess} | {r} |"
+    return (f"| {name} | {len(shares)} | {share} | {excess} | {correlation_text(entries, 'free_excess')} | "
+            f"{error} | {correlation_text(entries, 'measurement_error')} |")
 
 
 def main(args):
@@ -138,8 +156,9 @@ def main(args):
     print(coverage_line("all", [i for entries in by_key.values() for i in entries]))
     print()
     print("| planted key | sizes | median size / planted (from neutral) | median free parameter less its truth | "
-          "correlation of the two |")
-    print("| :-- | --: | --: | --: | --: |")
+          "correlation of the two | median measurement of the free parameter less its truth | "
+          "correlation of the size with it |")
+    print("| :-- | --: | --: | --: | --: | --: | --: |")
     for key in sorted(by_key):
         print(trade_off_line(key, by_key[key]))
     print()
