@@ -33,6 +33,7 @@ import statistics
 import sys
 
 from blind_pass import calibrations
+from interval_sides import side_of
 from visibility_ceiling import clopper_pearson
 
 MIN_FOR_FACTOR = 20
@@ -83,12 +84,6 @@ def intervals(pass_dirs, left_out):
                     "free_excess": excess[0] if len(excess) == 1 else None,
                     "measurement_error": measurement_error[0] if len(measurement_error) == 1 else None})
     return out
-
-
-def side_of(e, truth, neutral):
-    if e["lo95"] <= truth <= e["hi95"]:
-        return "held"
-    return "toward" if abs(e["value"] - neutral) < abs(truth - neutral) else "away"
 
 
 def z_of(e, truth):

@@ -28,6 +28,14 @@ def friction_sigmas(summary):
     return None
 
 
+def side_of(e, truth, neutral):
+    """Where an added effect's interval (summary.json lo95, hi95) stands to the planted value: "held" (ends
+    included), "toward" (the size nearer neutral than the truth) or "away"."""
+    if e["lo95"] <= truth <= e["hi95"]:
+        return "held"
+    return "toward" if abs(e["value"] - neutral) < abs(truth - neutral) else "away"
+
+
 def sides(pass_dir):
     """(intervals holding the truth, misses toward neutral, misses away), each miss a line, and the free
     parameter's distance from its measurement (in its standard errors) for each interval, by side."""
@@ -48,15 +56,13 @@ def sides(pass_dir):
             if e["key"] not in truth:
                 continue
             value, neutral = truth[e["key"]]
-            if e["lo95"] <= value <= e["hi95"]:
+            side = side_of(e, value, neutral)
+            if side == "held":
                 covered += 1
                 side = "covered"
-            elif abs(e["value"] - neutral) < abs(value - neutral):
-                toward.append(f"{case} ({e['key']} {e['value']:.4g} for {value:.4g}{note})")
-                side = "toward"
             else:
-                away.append(f"{case} ({e['key']} {e['value']:.4g} for {value:.4g}{note})")
-                side = "away"
+                (toward if side == "toward" else away).append(
+                    f"{case} ({e['key']} {e['value']:.4g} for {value:.4g}{note})")
             if sigmas is not None:
                 far[side].append(sigmas)
     return covered, toward, away, far
