@@ -18,6 +18,15 @@ planted one: 1 exact, below 1 toward neutral) against the free parameter's fitte
 truth (the particle friction in the blind study), with their Pearson correlation (from 5 sizes on),
 and the size against the free parameter's measurement beside the data less its truth (truth.json
 "measured"; drawn with the twin, before any fit).
+A third table counts intervals (not twins) whose twin's true free parameter lay outside the final
+fit's surface window: with one free parameter, the profile minimises the free parameter within five
+consecutive nodes of the baseline grid (fit.cpp surface_window), and where the truth's lies outside,
+the profile cannot pass through the truth (the pass's `design` file names the data file whose [[free]]
+gives the grid). A proxy: the profile at the planted size puts the free parameter where it fits best
+for that size, not at its truth. And approximate: the window is taken around the fitted value, where
+fit.cpp takes it around the node the final surface was built at, which for a first-round fit that
+did not move (the baseline's best node) can be one node off; passes before f62f98f bounded every
+effect's fit by the baseline's window.
 The last lines count what was left out: effects added without an interval, planted values at
 neutral (no share), twins with other than one free parameter (no excess).
 
@@ -31,13 +40,59 @@ import math
 import os
 import statistics
 import sys
+import tomllib
 
 from blind_pass import calibrations
 from interval_sides import side_of
 from visibility_ceiling import clopper_pearson
 
+GRID_MAX = 9       # CalibrationDef::grid_max (calibrate/calibration.hpp)
+WINDOW_NODES = 5   # fit.cpp surface_window
 MIN_FOR_FACTOR = 20
 MIN_FOR_CORRELATION = 5
+
+
+def free_grids(pass_dir):
+    """{key: baseline grid levels} of the pass's design (fit.cpp grid_levels with one free parameter:
+    its step from lo, at most GRID_MAX levels, spread evenly if more would be needed); {} without a
+    design file or with other than one free parameter."""
+    design_file = os.path.join(pass_dir, "design")
+    if not os.path.exists(design_file):
+        return {}
+    with open(design_file) as f:
+        data_file = f.read().strip()
+    if not os.path.isabs(data_file):  # written relative to the repository's root
+        data_file = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), data_file)
+    if not os.path.exists(data_file):
+        return {}
+    with open(data_file, "rb") as f:
+        free = tomllib.load(f).get("free", [])
+    if len(free) != 1:
+        return {}
+    lo, hi, step = free[0]["lo"], free[0]["hi"], free[0]["step"]
+    levels = math.floor((hi - lo) / step + 1e-9) + 1
+    if levels > GRID_MAX:
+        levels, step = GRID_MAX, (hi - lo) / (GRID_MAX - 1)
+    return {free[0]["key"]: [lo + k * step for k in range(levels)]}
+
+
+def window_around(grid, value):
+    """The (lo, hi) of the surface's window around a fitted value (fit.cpp surface_window)."""
+    if len(grid) <= WINDOW_NODES:
+        return grid[0], grid[-1]
+    nearest = min(range(len(grid)), key=lambda k: abs(grid[k] - value))
+    first = min(max(nearest - 2, 0), len(grid) - WINDOW_NODES)
+    return grid[first], grid[first + WINDOW_NODES - 1]
+
+
+def truth_outside_window(grids, fitted, free):
+    """Whether the twin's true free parameter lies outside the final fit's surface window (None when
+    that cannot be said: no grid, or the free parameter not fitted)."""
+    for key, grid in grids.items():
+        if key in fitted and key in free:
+            lo, hi = window_around(grid, fitted[key])
+            return not lo - 1e-9 <= free[key] <= hi + 1e-9
+    return None
 
 
 def intervals(pass_dirs, left_out):
@@ -45,12 +100,15 @@ def intervals(pass_dirs, left_out):
     side ("held", "toward" neutral or "away"), z (|miss| in the interval's se; inf for a miss with no
     half on the truth's side), share (the size's departure from neutral over the planted one: 1 exact,
     below 1 toward neutral; None with the planted value at neutral) and free_excess (the free parameter
-    fitted less its truth; None unless the twin has exactly one). `left_out` counts what was skipped."""
+    fitted less its truth; None unless the twin has exactly one), measurement_error (the free parameter's
+    measurement less its truth) and truth_outside_window (truth_outside_window below). `left_out` counts
+    what was skipped."""
     out = {}
     for pass_dir in pass_dirs:
         if not os.path.isdir(pass_dir):
             print(f"error: no folder {pass_dir}", file=sys.stderr)
             sys.exit(2)
+        grids = free_grids(pass_dir)
         for case, summary in calibrations(pass_dir):
             truth_file = os.path.join(pass_dir, "truth", case + ".json")
             if not os.path.exists(truth_file):
@@ -82,7 +140,8 @@ def intervals(pass_dirs, left_out):
                     "side": side_of(e, truth, neutral), "z": z_of(e, truth),
                     "share": (e["value"] - neutral) / (truth - neutral) if truth != neutral else None,
                     "free_excess": excess[0] if len(excess) == 1 else None,
-                    "measurement_error": measurement_error[0] if len(measurement_error) == 1 else None})
+                    "measurement_error": measurement_error[0] if len(measurement_error) == 1 else None,
+                    "truth_outside_window": truth_outside_window(grids, fitted, free)})
     return out
 
 
@@ -134,6 +193,15 @@ def trade_off_line(name, entries):
             f"{error} | {correlation_text(entries, 'measurement_error')} |")
 
 
+def window_line(name, entries):
+    """Of the intervals that held and of those that missed, how many had the truth's free parameter
+    outside the final fit's surface window (of those where it can be said)."""
+    def count(side):
+        known = [i for i in entries if (i["side"] == "held") == (side == "held") and i["truth_outside_window"] is not None]
+        return f"{sum(1 for i in known if i['truth_outside_window'])} of {len(known)}"
+    return f"| {name} | {count('held')} | {count('missed')} |"
+
+
 def main(args):
     if not args:
         print("usage: interval_coverage.py PASS_DIR [PASS_DIR...]", file=sys.stderr)
@@ -156,6 +224,13 @@ def main(args):
     print("| :-- | --: | --: | --: | --: | --: | --: |")
     for key in sorted(by_key):
         print(trade_off_line(key, by_key[key]))
+    print()
+    print("| planted key | held: truth's free parameter outside the final window | "
+          "missed: truth's free parameter outside the final window |")
+    print("| :-- | --: | --: |")
+    for key in sorted(by_key):
+        print(window_line(key, by_key[key]))
+    print(window_line("all", [i for entries in by_key.values() for i in entries]))
     print()
     for what in ("effects added without an interval", "planted values at neutral (no share)",
                  "sizes of twins without exactly one free parameter (no excess)"):

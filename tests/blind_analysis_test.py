@@ -116,8 +116,9 @@ CASES = {
 }
 
 
-def run(script, *args):
-    done = subprocess.run([sys.executable, str(CALIBRATE / script), *map(str, args)], capture_output=True, text=True)
+def run(script, *args, cwd=None):
+    done = subprocess.run([sys.executable, str(CALIBRATE / script), *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd)
     return done.returncode, done.stdout, done.stderr
 
 
@@ -409,6 +410,32 @@ class BlindAnalysis(unittest.TestCase):
             self.assertIn("| particles.rolling_resistance | 1 | 1 (100 %; 3-100 %) | 0 / 0 | 1.96 | - |", out)
             self.assertIn("| particles.rolling_resistance | 1 | 0.50 | +0.020 | - | -0.020 | - |", out)
             self.assertIn("left out: planted values at neutral (no share): 0", out)
+
+    def test_interval_coverage_says_where_the_truths_free_parameter_lay_against_the_final_window(self):
+        # The grid 0.1-0.5 in steps of 0.05 (nine nodes): a friction fitted at 0.42 has the window
+        # 0.30-0.50 (nearest node 0.40), which holds the truth 0.40; one fitted at 0.20 has 0.10-0.30,
+        # which does not. Without a design file nothing can be said ("0 of 0").
+        code, out, _ = run("interval_coverage.py", self.pass_dir)
+        self.assertIn("| all | 0 of 0 | 0 of 0 |", out)
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp)
+            (folder / "design.toml").write_text('[[free]]\nkey = "particles.friction_particle"\nlo = 0.1\nhi = 0.5\nstep = 0.05\n')
+            (folder / "design").write_text(str(folder / "design.toml") + "\n")
+            (folder / "truth").mkdir()
+            for case, fitted, value in (("near", 0.42, 2.95), ("far", 0.20, 2.4), ("far-held", 0.20, 2.95)):
+                (folder / "truth" / f"{case}.json").write_text(json.dumps(truth(case, [DRAG])))
+                (folder / case).mkdir()
+                s = summary([added("linear_drag", DRAG["key"], value, value - 0.2, value + 0.2)], "effect found")
+                s["after"]["params"]["particles.friction_particle"] = fitted
+                (folder / case / "summary.json").write_text(json.dumps(s))
+            code, out, _ = run("interval_coverage.py", folder)
+            self.assertEqual(code, 0)
+            self.assertIn("| particles.drag_per_s | 1 of 2 | 1 of 1 |", out)
+            # The design file as the passes write it: relative to the repository's root (design v2's grid is
+            # the same), whatever the working directory.
+            (folder / "design").write_text("data/blind/design_v2.toml\n")
+            code, out, _ = run("interval_coverage.py", folder, cwd="/")
+            self.assertIn("| particles.drag_per_s | 1 of 2 | 1 of 1 |", out)
 
     def test_pass_counts_gives_the_cost_and_the_wording_of_the_identifications(self):
         code, out, _ = run("pass_counts.py", self.pass_dir)
