@@ -202,6 +202,17 @@ def window_line(name, entries):
     return f"| {name} | {count('held')} | {count('missed')} |"
 
 
+def print_table(header, alignment, line, by_key, pooled):
+    """A markdown table: the header, one line per planted key (and one over all keys if `pooled`), a blank line."""
+    print(header)
+    print(alignment)
+    for key in sorted(by_key):
+        print(line(key, by_key[key]))
+    if pooled:
+        print(line("all", [i for entries in by_key.values() for i in entries]))
+    print()
+
+
 def main(args):
     if not args:
         print("usage: interval_coverage.py PASS_DIR [PASS_DIR...]", file=sys.stderr)
@@ -211,27 +222,16 @@ def main(args):
     if not by_key:
         print("no interval of a planted key in the passes given")
         return 0
-    print("| planted key | intervals | hold the truth (exact 95 %) | misses toward neutral / away | "
-          "median \\|z\\| (0.67 if right) | widening for 95 % |")
-    print("| :-- | --: | :-- | :-: | --: | --: |")
-    for key in sorted(by_key):
-        print(coverage_line(key, by_key[key]))
-    print(coverage_line("all", [i for entries in by_key.values() for i in entries]))
-    print()
-    print("| planted key | sizes | median size / planted (from neutral) | median free parameter less its truth | "
-          "correlation of the two | median measurement of the free parameter less its truth | "
-          "correlation of the size with it |")
-    print("| :-- | --: | --: | --: | --: | --: | --: |")
-    for key in sorted(by_key):
-        print(trade_off_line(key, by_key[key]))
-    print()
-    print("| planted key | held: truth's free parameter outside the final window | "
-          "missed: truth's free parameter outside the final window |")
-    print("| :-- | --: | --: |")
-    for key in sorted(by_key):
-        print(window_line(key, by_key[key]))
-    print(window_line("all", [i for entries in by_key.values() for i in entries]))
-    print()
+    print_table("| planted key | intervals | hold the truth (exact 95 %) | misses toward neutral / away | "
+                "median \\|z\\| (0.67 if right) | widening for 95 % |", "| :-- | --: | :-- | :-: | --: | --: |", coverage_line,
+                by_key, pooled=True)
+    print_table("| planted key | sizes | median size / planted (from neutral) | median free parameter less its truth | "
+                "correlation of the two | median measurement of the free parameter less its truth | "
+                "correlation of the size with it |", "| :-- | --: | --: | --: | --: | --: | --: |", trade_off_line, by_key,
+                pooled=False)
+    print_table("| planted key | held: truth's free parameter outside the final window | "
+                "missed: truth's free parameter outside the final window |", "| :-- | --: | --: |", window_line, by_key,
+                pooled=True)
     for what in ("effects added without an interval", "planted values at neutral (no share)",
                  "sizes of twins without exactly one free parameter (no excess)"):
         print(f"left out: {what}: {left_out[what]}")
