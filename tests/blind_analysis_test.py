@@ -437,6 +437,23 @@ class BlindAnalysis(unittest.TestCase):
             code, out, _ = run("interval_coverage.py", folder, cwd="/")
             self.assertIn("| particles.drag_per_s | 1 of 2 | 1 of 1 |", out)
 
+    def test_surface_optimism_sets_the_fresh_chi2_against_the_surfaces(self):
+        # Two calibrations: final surface chi2 43 (the fixture's), fresh 50 and 60: differences +7 and +17, median
+        # +12; 44 points, one measurement, dof 43: k = 2, 2k = 4. The baselines were not re-scored.
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp)
+            for case, fresh in (("a", 50.0), ("b", 60.0)):
+                (folder / case).mkdir()
+                s = summary([], "effect found")
+                s["after"]["fitted"].update({"n": 44, "dof": 43})
+                s["after"]["fitted_fresh"] = {"chi2": fresh}
+                (folder / case / "summary.json").write_text(json.dumps(s))
+            code, out, _ = run("surface_optimism.py", folder)
+            self.assertEqual(code, 0)
+            self.assertIn("baseline: none re-scored", out)
+            self.assertIn("final: fresh less surface chi2 median +12.0 (quartiles +4.5, +19.5; 2 calibrations), 2k = 4", out)
+        self.assertEqual(run("surface_optimism.py")[0], 2)
+
     def test_pass_counts_gives_the_cost_and_the_wording_of_the_identifications(self):
         code, out, _ = run("pass_counts.py", self.pass_dir)
         self.assertEqual(code, 0)
