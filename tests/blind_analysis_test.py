@@ -452,6 +452,15 @@ class BlindAnalysis(unittest.TestCase):
             self.assertEqual(code, 0)
             self.assertIn("baseline: none re-scored", out)
             self.assertIn("final: fresh less surface chi2 median +12.0 (quartiles +4.5, +19.5; 2 calibrations), 2k = 4", out)
+            self.assertNotIn("held-out point", out)  # none re-scored there
+            # With the held-out points: surface 12.0 over 4 points (the fixture's n), fresh 14.0 and 16.0: +0.5 and +1.0.
+            for case, fresh in (("a", 14.0), ("b", 16.0)):
+                s = json.loads((folder / case / "summary.json").read_text())
+                s["after"]["held_out"] = {"chi2": 12.0, "n": 4}
+                s["after"]["held_out_fresh"] = {"chi2": fresh}
+                (folder / case / "summary.json").write_text(json.dumps(s))
+            code, out, _ = run("surface_optimism.py", folder)
+            self.assertIn("2k = 4; per held-out point median +0.75", out)
         self.assertEqual(run("surface_optimism.py")[0], 2)
 
     def test_pass_counts_gives_the_cost_and_the_wording_of_the_identifications(self):
