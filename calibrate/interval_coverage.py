@@ -171,7 +171,7 @@ def coverage_line(name, entries):
 
 def correlation_text(entries, field):
     """Pearson correlation of the share with `field` over the sizes that have both (from 5 on; "-" below)."""
-    pairs = [(i["share"], i[field]) for i in entries if i["share"] is not None and i.get(field) is not None]
+    pairs = [(i["share"], i[field]) for i in entries if i["share"] is not None and i[field] is not None]
     if len(pairs) >= MIN_FOR_CORRELATION and len({x for x, _ in pairs}) > 1 and len({y for _, y in pairs}) > 1:
         return f"{statistics.correlation([x for x, _ in pairs], [y for _, y in pairs]):+.2f}"
     return "-"
@@ -185,7 +185,7 @@ def trade_off_line(name, entries):
     down."""
     shares = [i["share"] for i in entries if i["share"] is not None]
     excesses = [i["free_excess"] for i in entries if i["share"] is not None and i["free_excess"] is not None]
-    errors = [i["measurement_error"] for i in entries if i["share"] is not None and i.get("measurement_error") is not None]
+    errors = [i["measurement_error"] for i in entries if i["share"] is not None and i["measurement_error"] is not None]
     excess = f"{statistics.median(excesses):+.3f}" if excesses else "-"
     error = f"{statistics.median(errors):+.3f}" if errors else "-"
     share = f"{statistics.median(shares):.2f}" if shares else "-"
@@ -196,10 +196,10 @@ def trade_off_line(name, entries):
 def window_line(name, entries):
     """Of the intervals that held and of those that missed, how many had the truth's free parameter
     outside the final fit's surface window (of those where it can be said)."""
-    def count(side):
-        known = [i for i in entries if (i["side"] == "held") == (side == "held") and i["truth_outside_window"] is not None]
+    def count(held):
+        known = [i for i in entries if (i["side"] == "held") == held and i["truth_outside_window"] is not None]
         return f"{sum(1 for i in known if i['truth_outside_window'])} of {len(known)}"
-    return f"| {name} | {count('held')} | {count('missed')} |"
+    return f"| {name} | {count(True)} | {count(False)} |"
 
 
 def print_table(header, alignment, line, by_key, pooled):

@@ -11,9 +11,11 @@ runs' standard errors). For the baseline ("before") and the final state ("after"
 quartiles of fresh less surface over the pass's calibrations, beside the median number of fitted
 parameters k (the fitted points and measured parameters less the dof). Where the surface were exact and its noise as stated, the
 difference would average about 2k: the fit takes about k from the surface's chi^2 (it is minimised
-there) and the parameters' estimation error adds about k to the fresh one; a little more (about 1.5 on
-44 points where the model is 31 % of the variance) because the fresh runs' variance is estimated
-point by point from 6 runs. Well above that, among the readings: the surface's predictions at the fit
+there) and the parameters' estimation error adds about k to the fresh one; and a little more because
+the fresh runs' variance at each point is estimated from their few replicates (R: summary.json
+"model_replicates"), which raises a chi^2 on average (variance_excess below, from the model's share
+of the variance, "model_noise_share"; the surface's variance, pooled over its nodes, is taken as
+known). The line gives the median of that expectation, 2k + excess. Well above it, among the readings: the surface's predictions at the fit
 lie closer to the data than the model's do (optimism: a fit that found where the surface's own
 errors happen to meet the data; profiles read off it too narrow), or the surface states larger
 standard errors than its predictions have (an effect term's variance added to the surface's as if
@@ -24,15 +26,35 @@ misfits, as a baseline without a planted effect, the residual dominates both and
 be of either sign.
 """
 import json
+import math
 import statistics
 import sys
 
 from blind_pass import calibrations
 
 
+def variance_excess(n, share, replicates, steps=20000):
+    """How much a chi^2 over n points rises on average when the model's part of each point's variance (a
+    share of the total) is estimated from `replicates` runs: n (E[1 / (1 - share + share Y/nu)] - 1), Y a
+    chi^2 variable of nu = replicates - 1 degrees of freedom (normal runs), integrated numerically
+    (midpoint rule over Y up to nu + 40 sqrt(2 nu)). With share 1 it is n 2/(nu - 2) for nu > 2."""
+    nu = replicates - 1
+    if nu < 1 or not 0 <= share <= 1:
+        return math.nan
+    top = nu + 40 * math.sqrt(2 * nu)
+    h = top / steps
+    log_norm = (nu / 2) * math.log(2) + math.lgamma(nu / 2)
+    mean = 0.0
+    for j in range(steps):
+        y = (j + 0.5) * h
+        density = math.exp((nu / 2 - 1) * math.log(y) - y / 2 - log_norm)
+        mean += density * h / (1 - share + share * y / nu)
+    return n * (mean - 1)
+
+
 def differences(pass_dir, state):
-    """[(fresh chi2 less surface chi2, fitted parameters, the same per held-out point or None)] over the
-    pass's calibrations with both."""
+    """[(fresh chi2 less surface chi2, its expectation 2k + variance_excess, the same per held-out point or
+    None)] over the pass's calibrations with both."""
     out = []
     for _, path in calibrations(pass_dir):
         with open(path) as f:
@@ -46,7 +68,9 @@ def differences(pass_dir, state):
         held, held_fresh = s.get("held_out", {}), s.get("held_out_fresh", {})
         per_held = ((held_fresh["chi2"] - held["chi2"]) / held["n"]
                     if held.get("chi2") is not None and held_fresh.get("chi2") is not None and held.get("n") else None)
-        out.append((fresh["chi2"] - surface["chi2"], k, per_held))
+        share = summary.get("model_noise_share")
+        excess = variance_excess(surface["n"], share, summary.get("model_replicates", 0)) if share is not None else 0.0
+        out.append((fresh["chi2"] - surface["chi2"], 2 * k + excess, per_held))
     return out
 
 
@@ -55,11 +79,11 @@ def line(name, pairs):
         return f"{name}: none re-scored"
     diffs = sorted(d for d, _, _ in pairs)
     quartiles = statistics.quantiles(diffs, n=4) if len(diffs) >= 2 else [diffs[0]] * 3
-    k = statistics.median(k for _, k, _ in pairs)
+    expected = statistics.median(e for _, e, _ in pairs)
     held = [h for _, _, h in pairs if h is not None]
     held_text = f"; per held-out point median {statistics.median(held):+.2f}" if held else ""
     return (f"{name}: fresh less surface chi2 median {quartiles[1]:+.1f} (quartiles {quartiles[0]:+.1f}, "
-            f"{quartiles[2]:+.1f}; {len(diffs)} calibrations), 2k = {2 * k:g}{held_text}")
+            f"{quartiles[2]:+.1f}; {len(diffs)} calibrations), expected about {expected:+.1f}{held_text}")
 
 
 def main(args):

@@ -439,7 +439,8 @@ class BlindAnalysis(unittest.TestCase):
 
     def test_surface_optimism_sets_the_fresh_chi2_against_the_surfaces(self):
         # Two calibrations: final surface chi2 43 (the fixture's), fresh 50 and 60: differences +7 and +17, median
-        # +12; 44 points, one measurement, dof 43: k = 2, 2k = 4. The baselines were not re-scored.
+        # +12; 44 points, one measurement, dof 43: k = 2, 2k = 4; no model share given: nothing more expected.
+        # The baselines were not re-scored.
         with tempfile.TemporaryDirectory() as tmp:
             folder = Path(tmp)
             for case, fresh in (("a", 50.0), ("b", 60.0)):
@@ -451,7 +452,8 @@ class BlindAnalysis(unittest.TestCase):
             code, out, _ = run("surface_optimism.py", folder)
             self.assertEqual(code, 0)
             self.assertIn("baseline: none re-scored", out)
-            self.assertIn("final: fresh less surface chi2 median +12.0 (quartiles +4.5, +19.5; 2 calibrations), 2k = 4", out)
+            self.assertIn("final: fresh less surface chi2 median +12.0 (quartiles +4.5, +19.5; 2 calibrations), "
+                          "expected about +4.0", out)
             self.assertNotIn("held-out point", out)  # none re-scored there
             # With the held-out points: surface 12.0 over 4 points (the fixture's n), fresh 14.0 and 16.0: +0.5 and +1.0.
             for case, fresh in (("a", 14.0), ("b", 16.0)):
@@ -460,7 +462,15 @@ class BlindAnalysis(unittest.TestCase):
                 s["after"]["held_out_fresh"] = {"chi2": fresh}
                 (folder / case / "summary.json").write_text(json.dumps(s))
             code, out, _ = run("surface_optimism.py", folder)
-            self.assertIn("2k = 4; per held-out point median +0.75", out)
+            self.assertIn("expected about +4.0; per held-out point median +0.75", out)
+            # The model the whole variance, from 6 replicates: E[nu / chi2_nu] = nu / (nu - 2) = 5/3, so 44 points
+            # expect 44 x 2/3 = 29.3 more.
+            for case in ("a", "b"):
+                s = json.loads((folder / case / "summary.json").read_text())
+                s.update({"model_noise_share": 1.0, "model_replicates": 6})
+                (folder / case / "summary.json").write_text(json.dumps(s))
+            code, out, _ = run("surface_optimism.py", folder)
+            self.assertIn("expected about +33.3; per held-out point", out)
         self.assertEqual(run("surface_optimism.py")[0], 2)
 
     def test_pass_counts_gives_the_cost_and_the_wording_of_the_identifications(self):
