@@ -30,14 +30,22 @@ grep -v "runs/min" "$tmp/mpi.log" || true
 [ $rc -eq 0 ] || { echo "FAIL: mpirun exited $rc"; exit 1; }
 shards=$("$gapflow" export "$tmp/mpi.sqlite" --table provenance | tail -n +2 | cut -d, -f2)
 echo "runs per rank:"; echo "$shards" | sort | uniq -c
-if echo "$shards" | grep -qv "^mpi rank"; then echo "FAIL: a run not made by an MPI rank"; exit 1; fi
+if grep -qv "^mpi rank" <<< "$shards"; then echo "FAIL: a run not made by an MPI rank"; exit 1; fi
 "$gapflow" compare "$tmp/local.sqlite" "$tmp/mpi.sqlite"
 /usr/bin/python3 - "$tmp/local/summary.json" "$tmp/mpi/summary.json" <<'PY'
 import json, sys
 a, b = (json.load(open(f)) for f in sys.argv[1:3])
-for k in ("wall_seconds", "runs_simulated", "runs_reused", "run_seconds"):
+for k in ("wall_seconds", "cpu_seconds", "runs_simulated", "runs_reused", "run_seconds"):  # cost, not result
     a.pop(k, None); b.pop(k, None)
+def differences(x, y, where="summary"):
+    """The paths at which two JSON values differ, for a failure that says where."""
+    if isinstance(x, dict) and isinstance(y, dict):
+        return [d for k in sorted(set(x) | set(y)) for d in differences(x.get(k), y.get(k), f"{where}.{k}")]
+    if isinstance(x, list) and isinstance(y, list) and len(x) == len(y):
+        return [d for i, (u, v) in enumerate(zip(x, y)) for d in differences(u, v, f"{where}[{i}]")]
+    return [] if x == y else [f"{where}: local {json.dumps(x)[:80]}, MPI {json.dumps(y)[:80]}"]
 if a != b:
-    print("FAIL: the MPI calibration's summary differs from the local one"); sys.exit(1)
+    print("FAIL: the MPI calibration's summary differs from the local one:")
+    print("\n".join(differences(a, b)[:20])); sys.exit(1)
 print(f"summaries equal: verdict '{a['verdict']}', effects {[e['effect'] for e in a['effects']]}")
 PY

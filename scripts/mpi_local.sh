@@ -28,5 +28,5 @@ cat "$tmp/mpi.log"
 # Every run must have been simulated by a rank other than 0.
 shards=$("$gapflow" export "$tmp/mpi.sqlite" --table provenance | tail -n +2 | cut -d, -f2)
 echo "runs per rank:"; echo "$shards" | sort | uniq -c
-if echo "$shards" | grep -qv "^mpi rank"; then echo "FAIL: a run not made by an MPI rank"; exit 1; fi
+if grep -qv "^mpi rank" <<< "$shards"; then echo "FAIL: a run not made by an MPI rank"; exit 1; fi
 "$gapflow" compare "$tmp/local.sqlite" "$tmp/mpi.sqlite"

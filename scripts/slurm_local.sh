@@ -88,10 +88,10 @@ pids+=("$(wait_for_pid_file "$tmp/slurmctld.pid")")
 slurmd -f "$SLURM_CONF"
 pids+=("$(wait_for_pid_file "$tmp/slurmd.pid")")
 for _ in $(seq 60); do
-  sinfo -h -o %T 2>/dev/null | grep -qE '^idle' && break
+  grep -qE '^idle' <<< "$(sinfo -h -o %T 2>/dev/null)" && break
   sleep 1
 done
-sinfo -h -o %T | grep -qE '^idle' || { echo "FAIL: the node did not come up"; sinfo; exit 1; }
+grep -qE '^idle' <<< "$(sinfo -h -o %T)" || { echo "FAIL: the node did not come up"; sinfo; exit 1; }
 echo "one-node Slurm up: $(sinfo -h -o '%P %D %T %c')"
 
 # The study, as a job array of $tasks shares plus the dependent merge-and-report job.

@@ -40,17 +40,20 @@ for o in "${options[@]}"; do
 done
 [[ ${#cases[@]} -gt 0 ]] || { echo "error: no null twin in $pass, and no CASE given" >&2; exit 2; }
 first_summary=$pass/${cases[0]}/summary.json
+# The binary's options, read whole before they are searched: `gapflow --help | grep -q` under pipefail
+# fails at random when grep exits at its first match and the writer dies of SIGPIPE.
+calibrate_help=$("$gapflow" calibrate --help 2>/dev/null || true)
 [[ -f $first_summary ]] || { echo "error: $pass has no calibration of ${cases[0]}" >&2; exit 2; }
 if grep -q '"independent_signatures": true' "$first_summary"; then
   label="with the signatures sharing the baseline's runs"
-  if "$gapflow" calibrate --help 2>/dev/null | grep -q -- '--shared-signatures'; then replay_options+=(--shared-signatures); fi
+  if grep -q -- '--shared-signatures' <<< "$calibrate_help"; then replay_options+=(--shared-signatures); fi
 else
   label="with --independent-signatures"
   replay_options+=(--independent-signatures)
 fi
 # Rule 5 as the pass ran it (summary.json "alternatives"; absent before the option: none asked), where
 # GAPFLOW knows the option: binaries from 21de738 on ask 2 by default, which a pass before 24 did not.
-if "$gapflow" calibrate --help 2>/dev/null | grep -q -- '--alternatives'; then
+if grep -q -- '--alternatives' <<< "$calibrate_help"; then
   asked=$(/usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1])).get("alternatives", 0))' "$first_summary")
   replay_options+=(--alternatives "$asked")
 fi

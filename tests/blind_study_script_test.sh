@@ -23,6 +23,10 @@ cat > "$work/gapflow" <<'STUB'
 if [[ $* == *--help* ]]; then
   [[ ${STUB_BINARY:-new} != old ]] && echo "  --independent-signatures,--shared-signatures{false}"
   [[ ${STUB_BINARY:-new} == rule5 ]] && echo "  --alternatives INT:INT in [0 - 9]"
+  # More help after the options, longer than a pipe holds: a script that reads it as
+  # `gapflow --help | grep -q` under pipefail then fails every time (grep exits at the match, this
+  # writer dies of SIGPIPE), not only when the scheduler happens to interleave them so (CI, 2026-11-29).
+  printf '%*s\n' 200000 ''
   exit 0
 fi
 echo "$*" >> "$STUB_LOG"
