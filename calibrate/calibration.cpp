@@ -528,6 +528,16 @@ class Loop {
 
 }  // namespace
 
+namespace {
+
+void record_window(ModelState& state, const Surface& surface) {
+  state.window_keys = surface.keys;
+  state.window_lo = surface.lo;
+  state.window_hi = surface.hi;
+}
+
+}  // namespace
+
 CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Evaluator& ev) {
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = process_cpu_seconds();
@@ -541,6 +551,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   const BaselineFit base = fit_baseline(data, def, ev, [&](const std::string& s) { loop.say(s); });
   Surface surface = base.surface;
   out.before = make_state(data, base.params, surface.predict(base.params, data), n_free);
+  record_window(out.before, surface);
   loop.say(fmt::format("baseline {}: chi2/nu = {:.2f} (p = {:.3g}) on {} fitted points; held-out RMS {:.2f} sigma",
                        base.params.label(), out.before.fitted.chi.per_dof(), out.before.fitted.chi.p,
                        out.before.fitted.n, out.before.held_out.rms_whitened));
@@ -561,6 +572,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   ModelState state = out.before;
   if (def.max_effects > 0) loop.attribute(base, surface, state);
   out.after = state;
+  record_window(out.after, surface);
 
   // An alternative that was added itself (in a later round) stands beside the effect, not in its place.
   for (AddedEffect& e : out.effects)

@@ -90,6 +90,11 @@ struct ModelState {
   ErrorMeasures fitted, held_out;
   ErrorMeasures fitted_fresh, held_out_fresh;  // the same parameters simulated directly on fresh seeds
   Prediction simulated_fresh;
+  // The free parameters' range over the nodes of the surface `prediction` is read from (Surface lo,
+  // hi, in keys' units): a fit is bounded to it (fit.hpp surface_around). Recorded so that whether a
+  // truth lay outside it can be said exactly (calibrate/interval_coverage.py).
+  std::vector<std::string> window_keys;
+  std::vector<double> window_lo, window_hi;
   double bic = 0;  // deviance + k ln n, n = fitted points + measured free parameters (up to a constant: compare
                   // states, never read alone)
 };

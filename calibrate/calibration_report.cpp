@@ -34,10 +34,20 @@ std::string json_params(const ParameterSet& p) {
   return "{" + s + "}";
 }
 
+// {"key": [lo, hi], ...}: the surface window's range of each free parameter.
+std::string json_window(const ModelState& s) {
+  std::string out;
+  for (std::size_t k = 0; k < s.window_keys.size(); ++k)
+    out += fmt::format("{}{}: [{}, {}]", out.empty() ? "" : ", ", json_string(s.window_keys[k]), json_number(s.window_lo[k]),
+                       json_number(s.window_hi[k]));
+  return "{" + out + "}";
+}
+
 std::string json_state(const ModelState& s) {
-  return fmt::format(R"({{"params": {}, "fitted": {}, "held_out": {}, "fitted_fresh": {}, "held_out_fresh": {}, "bic": {}}})",
+  return fmt::format(R"({{"params": {}, "fitted": {}, "held_out": {}, "fitted_fresh": {}, "held_out_fresh": {}, "bic": {}, )"
+                     R"("surface_window": {}}})",
                      json_params(s.params), json_errors(s.fitted), json_errors(s.held_out), json_errors(s.fitted_fresh),
-                     json_errors(s.held_out_fresh), json_number(s.bic));
+                     json_errors(s.held_out_fresh), json_number(s.bic), json_window(s));
 }
 
 std::string json_list(const std::vector<std::string>& v) {
@@ -226,21 +236,30 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
 
 void write_points_csv(std::ostream& o, const DataFile& data, const CalibrationResult& r) {
   for (const DesignColumn& c : data.design) o << c.column << ",";
-  o << "observable,held_out,value,se,before,before_se,after,after_se,residual_before,residual_after\n";
+  // The surface's predictions (before, after) and, appended, the direct simulation's on fresh seeds at
+  // the same parameters (before_fresh, after_fresh): their difference per point is the surface's error there.
+  o << "observable,held_out,value,se,before,before_se,after,after_se,residual_before,residual_after,"
+       "before_fresh,before_fresh_se,after_fresh,after_fresh_se\n";
   const Prediction& b = r.before.prediction;
   const Prediction& a = r.after.prediction;
-  auto model_value = [&](const Prediction& p, std::size_t i) { return p.valid[i] ? fmt::format("{}", p.value[i]) : ""; };
+  const Prediction& bf = r.before.simulated_fresh;
+  const Prediction& af = r.after.simulated_fresh;
+  // Empty where the model gave no value (or, for a fresh prediction, where none was made).
+  auto model_value = [&](const Prediction& p, std::size_t i) {
+    return i < p.valid.size() && p.valid[i] ? fmt::format("{}", p.value[i]) : "";
+  };
   auto model_se = [&](const Prediction& p, std::size_t i) {
     // Back to the observable's unit (log scale: se_fit is relative).
-    if (!p.valid[i]) return std::string();
+    if (i >= p.valid.size() || !p.valid[i]) return std::string();
     return fmt::format("{}", data.points[i].scale == FitScale::log ? p.se_fit[i] * p.value[i] : p.se_fit[i]);
   };
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     for (const std::string& v : data.points[i].design) o << (v.front() == '"' ? v.substr(1, v.size() - 2) : v) << ",";
-    o << fmt::format("{},{},{},{},{},{},{},{},{},{}\n", to_string(data.points[i].observable),
+    o << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", to_string(data.points[i].observable),
                      data.points[i].held_out ? 1 : 0, data.points[i].value,
                      data.points[i].se, model_value(b, i), model_se(b, i), model_value(a, i), model_se(a, i),
-                     r.before.whitened[i], r.after.whitened[i]);
+                     r.before.whitened[i], r.after.whitened[i], model_value(bf, i), model_se(bf, i), model_value(af, i),
+                     model_se(af, i));
   }
 }
 

@@ -23,10 +23,11 @@ fit's surface window: with one free parameter, the profile minimises the free pa
 consecutive nodes of the baseline grid (fit.cpp surface_window), and where the truth's lies outside,
 the profile cannot pass through the truth (the pass's `design` file names the data file whose [[free]]
 gives the grid). A proxy: the profile at the planted size puts the free parameter where it fits best
-for that size, not at its truth. And approximate: the window is taken around the fitted value, where
-fit.cpp takes it around the node the final surface was built at, which for a first-round fit that
-did not move (the baseline's best node) can be one node off; passes before f62f98f bounded every
-effect's fit by the baseline's window.
+for that size, not at its truth. Where summary.json records the window (after.surface_window,
+binaries from 2026-11-29 on, none of passes up to 24) it is exact; otherwise approximate: the window
+is taken around the fitted value, where fit.cpp takes it around the node the final surface was built
+at, which for a first-round fit that did not move (the baseline's best node) can be one node off;
+passes before f62f98f bounded every effect's fit by the baseline's window.
 The last lines count what was left out: effects added without an interval, planted values at
 neutral (no share), twins with other than one free parameter (no excess).
 
@@ -85,9 +86,14 @@ def window_around(grid, value):
     return grid[first], grid[first + WINDOW_NODES - 1]
 
 
-def truth_outside_window(grids, fitted, free):
+def truth_outside_window(grids, fitted, free, recorded=None):
     """Whether the twin's true free parameter lies outside the final fit's surface window (None when
-    that cannot be said: no grid, or the free parameter not fitted)."""
+    that cannot be said: no grid, or the free parameter not fitted). `recorded`: summary.json's
+    after.surface_window ({key: [lo, hi]}, binaries from 2026-11-29 on), exact where given; else the
+    window is reconstructed around the fitted value (approximate, see the module's docstring)."""
+    for key, (lo, hi) in (recorded or {}).items():
+        if key in free:
+            return not lo - 1e-9 <= free[key] <= hi + 1e-9
     for key, grid in grids.items():
         if key in fitted and key in free:
             lo, hi = window_around(grid, fitted[key])
@@ -141,7 +147,8 @@ def intervals(pass_dirs, left_out):
                     "share": (e["value"] - neutral) / (truth - neutral) if truth != neutral else None,
                     "free_excess": excess[0] if len(excess) == 1 else None,
                     "measurement_error": measurement_error[0] if len(measurement_error) == 1 else None,
-                    "truth_outside_window": truth_outside_window(grids, fitted, free)})
+                    "truth_outside_window": truth_outside_window(grids, fitted, free,
+                                                                 s.get("after", {}).get("surface_window"))})
     return out
 
 

@@ -25,7 +25,7 @@ def main(folder):
     rows = list(csv.DictReader(open(folder / "points.csv")))
     summary = json.load(open(folder / "summary.json"))
     fixed = {"observable", "held_out", "value", "se", "before", "before_se", "after", "after_se", "residual_before",
-             "residual_after"}
+             "residual_after", "before_fresh", "before_fresh_se", "after_fresh", "after_fresh_se"}
     design = [c for c in rows[0].keys() if c not in fixed]
     numeric = [c for c in design if all(number(r[c]) is not None for r in rows)]
     labels = [c for c in design if c not in numeric]

@@ -436,6 +436,14 @@ class BlindAnalysis(unittest.TestCase):
             (folder / "design").write_text("data/blind/design_v2.toml\n")
             code, out, _ = run("interval_coverage.py", folder, cwd="/")
             self.assertIn("| particles.drag_per_s | 1 of 2 | 1 of 1 |", out)
+            # A window recorded in summary.json (after.surface_window) is taken as it is: "near" recorded as
+            # 0.10-0.30 has its truth 0.40 outside, "far" recorded as 0.20-0.40 inside.
+            for case, window in (("near", [0.10, 0.30]), ("far", [0.20, 0.40])):
+                s = json.loads((folder / case / "summary.json").read_text())
+                s["after"]["surface_window"] = {"particles.friction_particle": window}
+                (folder / case / "summary.json").write_text(json.dumps(s))
+            code, out, _ = run("interval_coverage.py", folder)
+            self.assertIn("| particles.drag_per_s | 2 of 2 | 0 of 1 |", out)
 
     def test_surface_optimism_sets_the_fresh_chi2_against_the_surfaces(self):
         # Two calibrations: final surface chi2 43 (the fixture's), fresh 50 and 60: differences +7 and +17, median

@@ -448,6 +448,36 @@ TEST(CalibrationReport, AlternativesNotExcludedAreNamedInTheRoundTheVerdictAndTh
   EXPECT_EQ(run_program({*python, "-c", check}, dir / "python.log"), 0);
 }
 
+// points.csv gives the fresh seeds' values beside the surface's (empty where none were simulated),
+// and summary.json each state's surface window.
+TEST(CalibrationReport, PointsCarryTheFreshValuesAndTheSummaryTheSurfaceWindows) {
+  const DataFile data = two_point_data();
+  CalibrationResult r = two_point_result();
+  r.after.simulated_fresh.value = r.after.simulated_fresh.fit = {1.3, 2.2};
+  r.after.simulated_fresh.se_fit = {0.07, 0.08};
+  r.after.simulated_fresh.valid = {true, false};
+  r.before.window_keys = r.after.window_keys = {"particles.friction_particle"};
+  r.before.window_lo = {0.3}, r.before.window_hi = {0.5};
+  r.after.window_lo = {0.35}, r.after.window_hi = {0.55};
+  testing::TempDir dir("gapflow-calibration-report-fresh");
+  write_calibration_outputs(data, r, dir.path(), false);
+  std::ifstream csv(dir / "points.csv");
+  std::string header, first, second;
+  std::getline(csv, header), std::getline(csv, first), std::getline(csv, second);
+  EXPECT_TRUE(header.ends_with(",residual_after,before_fresh,before_fresh_se,after_fresh,after_fresh_se")) << header;
+  EXPECT_TRUE(first.ends_with(",-1,-1,,,1.3,0.07")) << first;  // no fresh runs before; the after's (linear scale)
+  EXPECT_TRUE(second.ends_with(",1,1,,,,")) << second;          // the fresh runs gave no value at the second point
+
+  const std::optional<std::string> python = find_python_with_matplotlib();
+  if (!python) GTEST_SKIP() << "no python3 to parse summary.json";
+  const std::string check = fmt::format(
+      "import json; s = json.load(open('{0}')); "
+      "assert s['before']['surface_window'] == {{'particles.friction_particle': [0.3, 0.5]}}, s['before']; "
+      "assert s['after']['surface_window'] == {{'particles.friction_particle': [0.35, 0.55]}}, s['after']",
+      (dir / "summary.json").string());
+  EXPECT_EQ(run_program({*python, "-c", check}, dir / "python.log"), 0);
+}
+
 // The round table of report.md and summary.json's candidates carry the "left by the fit" share:
 // as many cells as the header has, and summary.json stays valid JSON (parsed by python3).
 TEST(CalibrationReport, TheCandidateTableAndSummaryCarryTheShareLeftByTheFit) {

@@ -362,6 +362,17 @@ TEST(CalibrationSynthetic, AFitThatEndsAtItsSurfacesBoundIsFittedAgainOnTheSurfa
   std::size_t refits = 0;
   for (const std::string& line : r.log) refits += line.rfind("linear_drag: re-fitted on the response", 0) == 0;
   EXPECT_GE(refits, 2u) << "the surface moved once at most: the fit never left the baseline's surface\n" << run.log;
+  // Each state records the window of the surface it was read from (summary.json surface_window), and
+  // its friction lies inside it: the baseline's window above the truth 0.2, the final one moved down
+  // with the fit to hold it.
+  for (const ModelState* s : {&r.before, &r.after}) {
+    ASSERT_EQ(s->window_keys, std::vector<std::string>{"particles.friction_particle"});
+    EXPECT_LE(s->window_lo[0], friction(*s));
+    EXPECT_GE(s->window_hi[0], friction(*s));
+  }
+  EXPECT_GT(r.before.window_lo[0], 0.2);
+  EXPECT_LE(r.after.window_lo[0], 0.2);
+  EXPECT_GE(r.after.window_hi[0], 0.2);
 }
 
 // Spinning friction's signature correlates with drag's: both are significant, each is fitted in
