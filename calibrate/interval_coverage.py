@@ -91,6 +91,8 @@ def truth_outside_window(grids, fitted, free, recorded=None):
     that cannot be said: no grid, or the free parameter not fitted). `recorded`: summary.json's
     after.surface_window ({key: [lo, hi]}, binaries from 2026-11-29 on), exact where given; else the
     window is reconstructed around the fitted value (approximate, see the module's docstring)."""
+    if len(free) != 1:
+        return None   # the table is of twins with one free parameter (with more, the surface spans the grid)
     for key, (lo, hi) in (recorded or {}).items():
         if key in free:
             return not lo - 1e-9 <= free[key] <= hi + 1e-9

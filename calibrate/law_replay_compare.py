@@ -21,6 +21,17 @@ RUN_FIELDS = {"run_seconds", "cpu_seconds", "wall_seconds", "runs_simulated", "r
 DRAG = "linear_drag"
 
 
+# Fields of a state ("before", "after") that later binaries record and earlier ones did not (surface_window:
+# a2dddfa): compared where both summaries have them, left out where one does not.
+STATE_FIELDS_ADDED_LATER = {"surface_window"}
+
+
+def comparable_states(before, after):
+    """`before` and `after` states with the fields only one of them records left out."""
+    drop = {k for k in STATE_FIELDS_ADDED_LATER if (k in before) != (k in after)}
+    return without([before], drop)[0], without([after], drop)[0]
+
+
 def without(items, fields):
     """A list of objects with `fields` left out of each."""
     return [{k: v for k, v in x.items() if k not in fields} for x in items]
@@ -35,6 +46,10 @@ def other_differences(before, after, allowed=LAW_FIELDS, allowed_in={"form_check
             continue
         if key in allowed_in:
             if without(before.get(key, []), allowed_in[key]) != without(after.get(key, []), allowed_in[key]):
+                out.append(key)
+        elif key in ("before", "after") and isinstance(before.get(key), dict) and isinstance(after.get(key), dict):
+            b, a = comparable_states(before[key], after[key])
+            if b != a:
                 out.append(key)
         elif before.get(key) != after.get(key):
             out.append(key)

@@ -712,6 +712,20 @@ class LawReplayCompare(unittest.TestCase):
                                                                    | {"verdict": qualified}))
             done = subprocess.run(cmd + ["gap"], capture_output=True, text=True)
             self.assertIn("DIFFERS: the verdict changed where no linear drag was found", done.stdout)
+            # A state's surface_window, recorded by later binaries only: left out where one summary lacks it,
+            # compared where both have it.
+            state = {"params": {"particles.friction_particle": 0.3}}
+            window = {"surface_window": {"particles.friction_particle": [0.2, 0.4]}}
+            self.write(before, "window", "effect found", ["lateral_tilt"], {"after": state})
+            self.write(after, "window", "effect found", ["lateral_tilt"], {"after": state | window})
+            done = subprocess.run(cmd + ["window"], capture_output=True, text=True)
+            self.assertEqual(done.returncode, 0, done.stdout)
+            moved = {"surface_window": {"particles.friction_particle": [0.25, 0.45]}}
+            (before / "window" / "summary.json").unlink(), (before / "window").rmdir()
+            self.write(before, "window", "effect found", ["lateral_tilt"], {"after": state | moved})
+            done = subprocess.run(cmd + ["window"], capture_output=True, text=True)
+            self.assertEqual(done.returncode, 1, done.stdout)
+            self.assertIn("  DIFFERS: after", done.stdout)
             self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
 
 
