@@ -729,6 +729,48 @@ class LawReplayCompare(unittest.TestCase):
             self.assertEqual(subprocess.run(cmd + ["nothing"], capture_output=True, text=True).returncode, 2)
 
 
+class FreshPoints(unittest.TestCase):
+    """calibrate/fresh_points.py: the fresh seeds' chi^2 gap over the surface's, split per point."""
+
+    HEADER = ("W_over_d,observable,held_out,value,se,before,before_se,after,after_se,residual_before,residual_after,"
+              "before_fresh,before_fresh_se,after_fresh,after_fresh_se\n")
+
+    def test_splits_the_gap_into_variances_disagreement_and_cross_term(self):
+        # Worked by hand, both states alike. Fitted: an exit offset (linear) with data 1 +- 0.1, surface 0.9 +- 0.1,
+        # fresh 1.1 +- 0.1: v = 0.02 on both, d = 0.2, y - s = 0.1: variances 0 (expected 0), disagreement 2
+        # (expected 1), cross -2 (expected -1), gap 0; and J_mid (log scale) 10 +- 1 everywhere: all 0, expected 0,
+        # 1 and -1. Held out: an exit offset 1 +- 0.1, surface 1, fresh 1.2: disagreement 2, cross 0, gap 2. The
+        # fitted chi^2: 0.5 + 0 on both, plus the friction's measurement (0.30 for 0.32 +- 0.04: 0.25).
+        with tempfile.TemporaryDirectory() as tmp:
+            case = Path(tmp, "one")
+            case.mkdir()
+            rows = ["4,exit_offset,0,1,0.1,0.9,0.1,0.9,0.1,0,0,1.1,0.1,1.1,0.1",
+                    "4,j_mid,0,10,1,10,1,10,1,0,0,10,1,10,1",
+                    "5,exit_offset,1,1,0.1,1,0.1,1,0.1,0,0,1.2,0.1,1.2,0.1"]
+            (case / "points.csv").write_text(self.HEADER + "\n".join(rows) + "\n")
+            state = {"params": {"particles.friction_particle": 0.30}, "fitted": {"chi2": 0.75}, "fitted_fresh": {"chi2": 0.75}}
+            summary = {"before": state, "after": state,
+                       "measured_free": [{"key": "particles.friction_particle", "measured": 0.32, "se": 0.04}]}
+            (case / "summary.json").write_text(json.dumps(summary))
+            code, out, err = run("fresh_points.py", tmp)
+            self.assertEqual(code, 0, err)
+            self.assertIn("1 calibrations with fresh values per point", out)
+            self.assertIn("largest difference: surface 0.000, fresh 0.000", out)
+            self.assertIn("| final | fitted | 2 | +0.000 | +0.000 (+0.000) | +1.000 (+1.000) | -1.000 (-1.000) | +0.000 | +0.000 |", out)
+            self.assertIn("| final | held-out | 1 | +2.000 | +0.000 (+0.000) | +2.000 (+1.000) | +0.000 (-1.000) | +1.000 | +1.000 |", out)
+            self.assertIn("| baseline | fitted | 2 | +0.000 | +0.000 (+0.000) | +1.000 (+1.000) | -1.000 (-1.000) |", out)
+            self.assertIn("| final | j_mid | 1 | +0.000 | +0.000 (+0.000) | +0.000 (+1.000) | +0.000 (-1.000) |", out)
+            # A summary whose fitted chi^2 the points do not give is seen by the check.
+            summary["after"] = state | {"fitted_fresh": {"chi2": 1.75}}
+            (case / "summary.json").write_text(json.dumps(summary))
+            self.assertIn("surface 0.000, fresh 1.000", run("fresh_points.py", tmp)[1])
+            # points.csv without the fresh columns (binaries before a2dddfa): nothing to read.
+            (case / "points.csv").write_text("observable,held_out,value,se,after,after_se\nexit_offset,0,1,0.1,1,0.1\n")
+            self.assertIn("0 calibrations with fresh values per point", run("fresh_points.py", tmp)[1])
+        self.assertEqual(run("fresh_points.py", "/nonexistent")[0], 2)
+        self.assertEqual(run("fresh_points.py")[0], 2)
+
+
 class FormCheckSignal(unittest.TestCase):
     """calibrate/form_check_signal.py: the false alarms of twins whose planted effects were tried, by lambda."""
 
