@@ -25,7 +25,10 @@ so expected. Read against the expectation: a fit that found where the surface's 
 not on the held-out points; a surface whose errors exceed its stated se raises the disagreement on both.
 Per state (baseline, final) and side (fitted, held-out): points, the gap and each part per point (means over
 every point of every calibration), the disagreement's and cross term's excess over their expectations as a mean over the
-calibrations with its standard error, then the same per observable. A check line: the fitted points' chi^2 rebuilt here,
+calibrations with its standard error, and the median ratio of the surface's stated se to the fresh runs' (a
+quadratic through several nodes' runs predicts more tightly than the same number of runs at one point, so a
+ratio near 1 says the stated se holds more than the quadratic's own: the effects' terms, a lack-of-fit
+widening); then the same per observable. A check line: the fitted points' chi^2 rebuilt here,
 plus the measured free parameters' term, against summary.json's (largest difference over the calibrations;
 surface and fresh).
 """
@@ -33,6 +36,7 @@ import csv
 import json
 import math
 import os
+import statistics
 import sys
 from collections import defaultdict
 
@@ -68,6 +72,7 @@ def point_parts(row, state):
              "cross": -2 * d * (y - s) / v_f, "expected variances": v_s / v_f - 1,
              "expected disagreement": (se_s ** 2 + se_f ** 2) / v_f, "expected cross": -2 * se_s ** 2 / v_f}
     parts["gap"] = parts["variances"] + parts["disagreement"] + parts["cross"]
+    parts["se_ratio"] = se_s / se_f if se_f > 0 else math.nan
     parts["surface_chi2"], parts["fresh_chi2"] = (y - s) ** 2 / v_s, (y - f) ** 2 / v_f
     return parts
 
@@ -129,16 +134,16 @@ def report(folder):
     print(f"  check: fitted chi^2 rebuilt here (with the measured parameters' term) against summary.json, largest "
           f"difference: surface {worst['surface']:.3f}, fresh {worst['fresh']:.3f}")
     print("| state | points | n | gap per point | variances (expected) | disagreement (expected) | cross (expected) | "
-          "disagreement excess, per calibration | cross excess, per calibration |")
-    print("| :-- | :-- | --: | --: | --: | --: | --: | --: | --: |")
+          "disagreement excess, per calibration | cross excess, per calibration | se_s / se_f, median |")
+    print("| :-- | :-- | --: | --: | --: | --: | --: | --: | --: | --: |")
     for state, label in (("before", "baseline"), ("after", "final")):
         for side in ("fitted", "held-out"):
             parts = by_side.get((state, side), [])
             if parts:
                 print(f"| {label} | {side} | {len(parts)} | {row_cells(parts)} |")
     print("| state | observable | n | gap per point | variances (expected) | disagreement (expected) | cross (expected) | "
-          "disagreement excess, per calibration | cross excess, per calibration |")
-    print("| :-- | :-- | --: | --: | --: | --: | --: | --: | --: |")
+          "disagreement excess, per calibration | cross excess, per calibration | se_s / se_f, median |")
+    print("| :-- | :-- | --: | --: | --: | --: | --: | --: | --: | --: |")
     for state, label in (("before", "baseline"), ("after", "final")):
         for (at, observable), parts in sorted(by_observable.items()):
             if at == state:
@@ -154,6 +159,8 @@ def row_cells(parts):
         cells.append(f"{mean(parts, part):+.3f} ({mean(parts, 'expected ' + part):+.3f})")
     for part in ("disagreement", "cross"):
         cells.append(excess_text(parts, part))
+    ratios = [p["se_ratio"] for p in parts if not math.isnan(p["se_ratio"])]
+    cells.append(f"{statistics.median(ratios):.3f}" if ratios else "-")
     return " | ".join(cells)
 
 

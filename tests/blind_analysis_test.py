@@ -739,14 +739,16 @@ class FreshPoints(unittest.TestCase):
         # Worked by hand, both states alike. Fitted: an exit offset (linear) with data 1 +- 0.1, surface 0.9 +- 0.1,
         # fresh 1.1 +- 0.1: v = 0.02 on both, d = 0.2, y - s = 0.1: variances 0 (expected 0), disagreement 2
         # (expected 1), cross -2 (expected -1), gap 0; and J_mid (log scale) 10 +- 1 everywhere: all 0, expected 0,
-        # 1 and -1. Held out: an exit offset 1 +- 0.1, surface 1, fresh 1.2: disagreement 2, cross 0, gap 2. The
-        # fitted chi^2: 0.5 + 0 on both, plus the friction's measurement (0.30 for 0.32 +- 0.04: 0.25).
+        # 1 and -1. Held out: an exit offset 1 +- 0.1, surface 1 +- 0.1, fresh 1.2 +- 0.2: v_s 0.02, v_f 0.05,
+        # variances 0 (expected 0.02/0.05 - 1 = -0.6), disagreement 0.8 (expected 1), cross 0 (expected -0.4),
+        # gap 0.8, se ratio 0.5. The fitted chi^2: 0.5 + 0 on both, plus the friction's measurement (0.30 for
+        # 0.32 +- 0.04: 0.25).
         with tempfile.TemporaryDirectory() as tmp:
             case = Path(tmp, "one")
             case.mkdir()
             rows = ["4,exit_offset,0,1,0.1,0.9,0.1,0.9,0.1,0,0,1.1,0.1,1.1,0.1",
                     "4,j_mid,0,10,1,10,1,10,1,0,0,10,1,10,1",
-                    "5,exit_offset,1,1,0.1,1,0.1,1,0.1,0,0,1.2,0.1,1.2,0.1"]
+                    "5,exit_offset,1,1,0.1,1,0.1,1,0.1,0,0,1.2,0.2,1.2,0.2"]
             (case / "points.csv").write_text(self.HEADER + "\n".join(rows) + "\n")
             state = {"params": {"particles.friction_particle": 0.30}, "fitted": {"chi2": 0.75}, "fitted_fresh": {"chi2": 0.75}}
             summary = {"before": state, "after": state,
@@ -756,8 +758,8 @@ class FreshPoints(unittest.TestCase):
             self.assertEqual(code, 0, err)
             self.assertIn("1 calibrations with fresh values per point", out)
             self.assertIn("largest difference: surface 0.000, fresh 0.000", out)
-            self.assertIn("| final | fitted | 2 | +0.000 | +0.000 (+0.000) | +1.000 (+1.000) | -1.000 (-1.000) | +0.000 | +0.000 |", out)
-            self.assertIn("| final | held-out | 1 | +2.000 | +0.000 (+0.000) | +2.000 (+1.000) | +0.000 (-1.000) | +1.000 | +1.000 |", out)
+            self.assertIn("| final | fitted | 2 | +0.000 | +0.000 (+0.000) | +1.000 (+1.000) | -1.000 (-1.000) | +0.000 | +0.000 | 1.000 |", out)
+            self.assertIn("| final | held-out | 1 | +0.800 | +0.000 (-0.600) | +0.800 (+1.000) | +0.000 (-0.400) | -0.200 | +0.400 | 0.500 |", out)
             self.assertIn("| baseline | fitted | 2 | +0.000 | +0.000 (+0.000) | +1.000 (+1.000) | -1.000 (-1.000) |", out)
             self.assertIn("| final | j_mid | 1 | +0.000 | +0.000 (+0.000) | +0.000 (+1.000) | +0.000 (-1.000) |", out)
             # A summary whose fitted chi^2 the points do not give is seen by the check.
