@@ -28,7 +28,8 @@ every point of every calibration), the disagreement's and cross term's excess ov
 calibrations with its standard error, and the median ratio of the surface's stated se to the fresh runs' (a
 quadratic through several nodes' runs predicts more tightly than the same number of runs at one point, so a
 ratio near 1 says the stated se holds more than the quadratic's own: the effects' terms, a lack-of-fit
-widening); then the same per observable. A check line: the fitted points' chi^2 rebuilt here,
+widening); then the final state apart for the calibrations that added an effect (their surface carries the
+effects' terms) and those that added none (the baseline's quadratic alone); then per observable. A check line: the fitted points' chi^2 rebuilt here,
 plus the measured free parameters' term, against summary.json's (largest difference over the calibrations;
 surface and fresh).
 """
@@ -109,7 +110,7 @@ def collect(folder):
                     complete = False
                     continue
                 side = "held-out" if row["held_out"] == "1" else "fitted"
-                parts["case"] = case
+                parts["case"], parts["added"] = case, bool(summary.get("effects"))
                 by_side[(state, side)].append(parts)
                 by_observable[(state, row["observable"])].append(parts)
                 if side == "fitted":
@@ -141,6 +142,14 @@ def report(folder):
             parts = by_side.get((state, side), [])
             if parts:
                 print(f"| {label} | {side} | {len(parts)} | {row_cells(parts)} |")
+    print("| final state | points | calibrations | n | gap per point | variances (expected) | disagreement (expected) | "
+          "cross (expected) | disagreement excess, per calibration | cross excess, per calibration | se_s / se_f, median |")
+    print("| :-- | :-- | :-- | --: | --: | --: | --: | --: | --: | --: | --: |")
+    for side in ("fitted", "held-out"):
+        for added, label in ((True, "an effect added"), (False, "none added")):
+            parts = [p for p in by_side.get(("after", side), []) if p["added"] == added]
+            if parts:
+                print(f"| final | {side} | {label} | {len(parts)} | {row_cells(parts)} |")
     print("| state | observable | n | gap per point | variances (expected) | disagreement (expected) | cross (expected) | "
           "disagreement excess, per calibration | cross excess, per calibration | se_s / se_f, median |")
     print("| :-- | :-- | --: | --: | --: | --: | --: | --: | --: | --: |")

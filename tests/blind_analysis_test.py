@@ -761,6 +761,8 @@ class FreshPoints(unittest.TestCase):
             self.assertIn("| final | fitted | 2 | +0.000 | +0.000 (+0.000) | +1.000 (+1.000) | -1.000 (-1.000) | +0.000 | +0.000 | 1.000 |", out)
             self.assertIn("| final | held-out | 1 | +0.800 | +0.000 (-0.600) | +0.800 (+1.000) | +0.000 (-0.400) | -0.200 | +0.400 | 0.500 |", out)
             self.assertIn("| baseline | fitted | 2 | +0.000 | +0.000 (+0.000) | +1.000 (+1.000) | -1.000 (-1.000) |", out)
+            self.assertIn("| final | held-out | none added | 1 | +0.800 |", out)   # the summary has no effects
+            self.assertNotIn("an effect added", out)
             self.assertIn("| final | j_mid | 1 | +0.000 | +0.000 (+0.000) | +0.000 (+1.000) | +0.000 (-1.000) |", out)
             # A summary whose fitted chi^2 the points do not give is seen by the check.
             summary["after"] = state | {"fitted_fresh": {"chi2": 1.75}}
