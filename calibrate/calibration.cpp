@@ -526,10 +526,7 @@ class Loop {
   const BaselineFit* base_ = nullptr;  // set by attribute()
 };
 
-}  // namespace
-
-namespace {
-
+// The surface window a state's prediction was read from (ModelState window_*).
 void record_window(ModelState& state, const Surface& surface) {
   state.window_keys = surface.keys;
   state.window_lo = surface.lo;

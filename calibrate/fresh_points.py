@@ -60,8 +60,9 @@ def number(text):
 
 
 def point_parts(row, state):
-    """The point's chi^2 gap and its three parts, with the expected disagreement, or None where the surface
-    or the fresh runs gave no value (or the file has no fresh columns)."""
+    """The point's chi^2 gap, its three parts and each part's expectation, the ratio of the surface's se to the
+    fresh runs', and both chi^2 terms (for the check), or None where the surface or the fresh runs gave no value
+    (or the file has no fresh columns)."""
     s, se_s = number(row.get(state)), number(row.get(state + "_se"))
     f, se_f = number(row.get(state + "_fresh")), number(row.get(state + "_fresh_se"))
     if None in (s, se_s, f, se_f):
