@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace gapflow {
 
@@ -29,6 +30,11 @@ std::vector<double> paired_differences(const std::vector<Prediction>& moved, std
   }
   return d;
 }
+
+// The nodes a term measured at `at` pairs its moved runs with: the reference's, when its runs
+// are on the data file's seeds (those the surface's quadratic is made of where the nodes are
+// baseline grid nodes); none on seeds of their own.
+std::vector<ParameterSet> paired_nodes(const Reference& at) { return at.seed ? std::vector<ParameterSet>{} : at.nodes; }
 
 // A step that stays inside [lo, hi] from `at` (reversed if needed).
 double step_inside(double at, double step, double lo, double hi) {
@@ -235,6 +241,7 @@ void EffectResponses::measure_signatures(std::vector<Candidate>& cands, const st
     // without an obstruction (identical runs) counted as degrees of freedom beside the 4 with it.
     const Visibility v = step_visibility(diffs, data_.held_out_flags());
     EffectTerm t = EffectTerm::single_step(e.name, e.key, cand.neutral, e.lo, e.hi, cand.step, slope, slope_se);
+    t.paired_with = paired_nodes(at);
     cand.signature = t.slope;
     cand.signature_chi2 = v.chi2;
     cand.signature_dof = v.dof;
@@ -259,6 +266,7 @@ EffectTerm EffectResponses::measure_term(const Candidate& c, const Reference& at
   term.offsets = {0.0};
   term.shift = {std::vector<double>(data_.points.size(), 0.0)};
   term.shift_se = term.shift;
+  term.paired_with = paired_nodes(at);
   std::vector<double> offsets{c.step};
   for (double da : refinement_offsets(c, e)) offsets.push_back(da);
   add_sizes(term, c, offsets, at);
@@ -281,6 +289,13 @@ EffectTerm EffectResponses::measure_term(const Candidate& c, const Reference& at
 // its size is fitted on its measured response, not on a line through one step.
 void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std::vector<double>& wanted,
                                 const Reference& at) {
+  // Every size of a term pairs with the same runs (EffectTerm::paired_with).
+  const auto same_nodes = [](const std::vector<ParameterSet>& a, const std::vector<ParameterSet>& b) {
+    return std::equal(a.begin(), a.end(), b.begin(), b.end(),
+                      [](const ParameterSet& x, const ParameterSet& y) { return x.values == y.values; });
+  };
+  if (!same_nodes(term.paired_with, paired_nodes(at)))
+    throw std::logic_error(fmt::format("{}: more sizes measured against other runs than its first ones", c.effect));
   // Sizes that make no scenario go first, so that they move or drop no other size.
   std::vector<double> valid, offsets;
   for (double da : wanted)

@@ -9,88 +9,7 @@
 #include <cmath>
 #include <numeric>
 
-// Boost 1.74's pchip.hpp (Debian 12) calls isnan unqualified; later Boost qualifies it.
-using std::isnan;
-#include <boost/math/interpolators/pchip.hpp>
-
 namespace gapflow {
-
-// The cubic through one point's shifts, and the same cubic with each measured size's shift moved up
-// and down by `nudge` in turn: their differences at a size give the cubic's weights on the sizes, for
-// its variance. Both sides, since it is not linear in them and not everywhere smooth: its slopes are
-// harmonic means, and clamped to 0 where the secants turn, which is where an even response's end
-// slope at neutral sits (a tilt's: there the two sides' weights differ, 3.6 x at 0.5 deg on a
-// quadratic through 0, 2, 4, 6 deg, more toward neutral).
-struct SmoothResponse {
-  using Pchip = boost::math::interpolators::pchip<std::vector<double>>;
-  Pchip at;
-  std::vector<Pchip> up, down;  // [size]: the shift at that size moved up, down by nudge
-  double nudge = 0;             // fit scale
-
-  // The weight of size j at da: the one-sided one of larger magnitude.
-  double weight(std::size_t j, double da, double value) const {
-    const double above = (up[j](da) - value) / nudge, below = (value - down[j](da)) / nudge;
-    return std::abs(above) >= std::abs(below) ? above : below;
-  }
-};
-
-namespace {
-
-// The slope of a PCHIP at an end (x[0], or x[n-1] with `last`): the three-point formula (the
-// derivative there of the parabola through the three end sizes), kept shape-preserving (0 where it
-// points against the end segment; at most 3 times the end segment's slope where the segments turn),
-// as Fritsch and Carlson's and MATLAB's pchip do. Boost 1.74's default is the end segment's own
-// slope, which on a response even in its effect (a tilt's J: slope 0 at neutral) reads a quadratic's
-// 1 deg as 0.56, as biased toward neutral as a straight line.
-double end_slope(const std::vector<double>& x, const std::vector<double>& y, bool last) {
-  const std::size_t n = x.size();
-  const std::size_t a = last ? n - 1 : 0, b = last ? n - 2 : 1, c = last ? n - 3 : 2;
-  const double h0 = x[b] - x[a], h1 = x[c] - x[b];  // signed: negative from the last end
-  const double d0 = (y[b] - y[a]) / h0, d1 = (y[c] - y[b]) / h1;
-  const double d = ((2 * h0 + h1) * d0 - h0 * d1) / (h0 + h1);
-  if (d * d0 <= 0) return 0.0;
-  if (d0 * d1 < 0 && std::abs(d) > 3 * std::abs(d0)) return 3 * d0;
-  return d;
-}
-
-SmoothResponse::Pchip pchip_through(const std::vector<double>& x, std::vector<double> y) {
-  const double left = end_slope(x, y, false), right = end_slope(x, y, true);
-  return SmoothResponse::Pchip(std::vector<double>(x), std::move(y), left, right);
-}
-
-SmoothResponse smooth_response(const std::vector<double>& x, std::vector<double> y) {
-  double scale = 0;
-  for (double v : y) scale = std::max(scale, std::abs(v));
-  SmoothResponse r{pchip_through(x, y), {}, {}, 1e-7 * std::max(scale, 1e-9)};
-  for (std::size_t j = 0; j < y.size(); ++j) {
-    for (const double sign : {1.0, -1.0}) {
-      std::vector<double> moved = y;
-      moved[j] += sign * r.nudge;
-      (sign > 0 ? r.up : r.down).push_back(pchip_through(x, std::move(moved)));
-    }
-  }
-  return r;
-}
-
-// The largest variance of sum_j w_j e_j over the sizes' errors e_j (standard errors s_j) when their
-// correlations lie in [0, 1] (the sizes' shifts share the neutral runs and their seeds, which
-// correlates them positively; a negative correlation is not allowed for): it is linear in each
-// correlation, so the largest is at 1 where the two weights agree in sign and 0 where
-// they do not, (sum of w_j s_j over w_j > 0)^2 + (sum of |w_j| s_j over w_j < 0)^2. For a straight
-// line between two sizes this is ((1-w) sa + w sb)^2 (exact next to neutral, where sa = 0), and
-// beyond the end sizes (1-w)^2 va + w^2 vb. The independent case's variance, which dips to half at
-// mid-segment, drew fits to the sizes or away from them (pass 6). Where the cubic's weights differ
-// by side (SmoothResponse::weight), the larger of each: on the tilt's quadratic through 0, 2, 4 and
-// 6 deg this holds the spread of its value at 0.5-5 deg for correlations 0 and 1; with full
-// correlation the spread is 0.87 of it at 3 deg, 0.85 at 5, 0.47 at 1 and 0.23 at 0.5 (conservative
-// near neutral; EffectTermResponse.TheCubicsVarianceCountsEverySizeItLeansOn prints them).
-struct VarianceBound {
-  double positive = 0, negative = 0;
-  void add(double weight, double se) { (weight > 0 ? positive : negative) += std::abs(weight) * se; }
-  double value() const { return positive * positive + negative * negative; }
-};
-
-}  // namespace
 
 double total_sigma(const DataFile& data, const Prediction& p, std::size_t i) {
   return std::hypot(data.fit_se(i), p.se_fit[i]);
@@ -197,8 +116,9 @@ std::vector<double> scaled(const Surface& s, const ParameterSet& p) {
 // Weighted least squares of one point's fit-scale values over the nodes. Adds the
 // weighted lack of fit and its degrees of freedom to the running sums (pooled over
 // the points, since 5 nodes give one point too few to judge its own curve).
-void regress_point(Surface& s, const std::vector<std::vector<double>>& xs, const std::vector<double>& y,
-                   const std::vector<double>& se, double& lack_sum, double& lack_dof) {
+// Returns the map from the nodes' values to the coefficients (padded like them).
+Eigen::MatrixXd regress_point(Surface& s, const std::vector<std::vector<double>>& xs, const std::vector<double>& y,
+                              const std::vector<double>& se, double& lack_sum, double& lack_dof) {
   const std::size_t n = y.size();
   const std::size_t p_quad = basis(xs.front(), true).size();
   const bool quadratic = n > p_quad;  // a quadratic needs more nodes than coefficients
@@ -213,6 +133,10 @@ void regress_point(Surface& s, const std::vector<std::vector<double>>& xs, const
   const Eigen::MatrixXd AtA = A.transpose() * A;
   Eigen::VectorXd coef = AtA.ldlt().solve(A.transpose() * b);
   Eigen::MatrixXd cov = AtA.inverse();
+  Eigen::VectorXd w(static_cast<Eigen::Index>(n));
+  for (std::size_t r = 0; r < n; ++r) w(static_cast<Eigen::Index>(r)) = 1 / std::max(se[r], 1e-9);
+  Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(p_quad), static_cast<Eigen::Index>(n));
+  weights.topRows(p) = cov * A.transpose() * w.asDiagonal();
   if (static_cast<Eigen::Index>(n) > p) {
     lack_sum += (A * coef - b).squaredNorm();
     lack_dof += static_cast<double>(static_cast<Eigen::Index>(n) - p);
@@ -226,6 +150,7 @@ void regress_point(Surface& s, const std::vector<std::vector<double>>& xs, const
   }
   s.coef.push_back(coef);
   s.cov.push_back(cov);
+  return weights;
 }
 
 Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nodes, const std::vector<Prediction>& preds) {
@@ -238,19 +163,30 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
     s.centre.push_back((lo + hi) / 2);
     s.half.push_back(std::max((hi - lo) / 2, 1e-12));
   }
+  s.nodes = nodes;
   double lack_sum = 0, lack_dof = 0;
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     std::vector<std::vector<double>> xs;
     std::vector<double> y, se;
+    std::vector<std::size_t> used;
     for (std::size_t n = 0; n < nodes.size(); ++n) {
       if (!preds[n].valid[i]) continue;
       xs.push_back(scaled(s, nodes[n]));
       y.push_back(preds[n].fit[i]);
       se.push_back(preds[n].se_fit[i]);
+      used.push_back(n);
     }
     s.valid.push_back(!xs.empty() && xs.size() * 2 >= nodes.size());
     if (xs.empty()) xs.push_back(scaled(s, nodes.front())), y.push_back(0), se.push_back(1);
-    regress_point(s, xs, y, se, lack_sum, lack_dof);
+    const Eigen::MatrixXd weights = regress_point(s, xs, y, se, lack_sum, lack_dof);
+    Eigen::MatrixXd per_node = Eigen::MatrixXd::Zero(weights.rows(), static_cast<Eigen::Index>(nodes.size()));
+    std::vector<double> variance(nodes.size(), 0.0);
+    for (std::size_t u = 0; u < used.size(); ++u) {
+      per_node.col(static_cast<Eigen::Index>(used[u])) = weights.col(static_cast<Eigen::Index>(u));
+      variance[used[u]] = se[u] * se[u];
+    }
+    s.node_weights.push_back(std::move(per_node));
+    s.node_variance.push_back(std::move(variance));
   }
   // Where the quadratic does not follow the nodes within their noise, widen every
   // point's uncertainty by the pooled lack of fit.
@@ -285,60 +221,35 @@ std::vector<Var> variables(const Surface& s, const std::string& fixed) {
   return v;
 }
 
+// Per effect, the indices of the surface's nodes its shifts are paired with (EffectTerm::paired_with).
+std::vector<std::vector<std::size_t>> shared_nodes(const Surface& s) {
+  std::vector<std::vector<std::size_t>> out(s.effects.size());
+  for (std::size_t e = 0; e < s.effects.size(); ++e)
+    for (const ParameterSet& paired : s.effects[e].paired_with)
+      for (std::size_t n = 0; n < s.nodes.size(); ++n)
+        if (s.nodes[n].values == paired.values) out[e].push_back(n);
+  return out;
+}
+
+// The covariance of the quadratic's value (its node weights at x: `at_x`) with effect e's shift at
+// point i, whose variance is `shift_variance`: the paired nodes' weights times the covariance of
+// one node's mean with the shift. Held within the Cauchy-Schwarz bound of the two parts it links
+// (the shared nodes' share of the quadratic and the shift), so that the se's estimates, each from
+// a few runs, can never make the sum's variance negative.
+double shared_covariance(const Surface& s, std::size_t i, const Eigen::RowVectorXd& at_x, const std::vector<std::size_t>& shared,
+                         const EffectTerm& e, double da, double shift_variance) {
+  double weight = 0, shared_variance = 0;
+  for (std::size_t n : shared) {
+    const double c = at_x(static_cast<Eigen::Index>(n));
+    weight += c;
+    shared_variance += c * c * s.node_variance[i][n];
+  }
+  const double bound = std::sqrt(shared_variance * shift_variance);
+  return std::clamp(weight * e.paired_covariance(i, da), -bound, bound);
+}
+
 }  // namespace
 
-EffectTerm EffectTerm::single_step(std::string effect, std::string key, double neutral, double lo, double hi,
-                                   double step, std::vector<double> slope, std::vector<double> slope_se) {
-  EffectTerm t;
-  t.effect = std::move(effect), t.key = std::move(key), t.neutral = neutral, t.lo = lo, t.hi = hi;
-  t.offsets = {0.0};
-  t.shift = {std::vector<double>(slope.size(), 0.0)};
-  t.shift_se = t.shift;
-  t.slope = std::move(slope), t.slope_se = std::move(slope_se);
-  std::vector<double> at, se;
-  for (std::size_t i = 0; i < t.slope.size(); ++i) at.push_back(t.slope[i] * step), se.push_back(std::abs(t.slope_se[i] * step));
-  t.add_size(step, at, se);
-  return t;
-}
-
-void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<double> se_at) {
-  const auto k = static_cast<std::size_t>(std::lower_bound(offsets.begin(), offsets.end(), da) - offsets.begin());
-  if (k < offsets.size() && offsets[k] == da) {
-    shift[k] = std::move(shift_at), shift_se[k] = std::move(se_at);
-  } else {
-    offsets.insert(offsets.begin() + static_cast<std::ptrdiff_t>(k), da);
-    shift.insert(shift.begin() + static_cast<std::ptrdiff_t>(k), std::move(shift_at));
-    shift_se.insert(shift_se.begin() + static_cast<std::ptrdiff_t>(k), std::move(se_at));
-  }
-  smooth.assign(shift.front().size(), nullptr);
-  if (offsets.size() < 4) return;  // PCHIP needs four sizes
-  for (std::size_t i = 0; i < smooth.size(); ++i) {
-    std::vector<double> y;
-    for (const std::vector<double>& s : shift) y.push_back(s[i]);
-    if (!std::all_of(y.begin(), y.end(), [](double v) { return std::isfinite(v); })) continue;
-    smooth[i] = std::make_shared<const SmoothResponse>(smooth_response(offsets, std::move(y)));
-  }
-}
-
-double EffectTerm::response(std::size_t i, double da, double& variance) const {
-  if (offsets.size() < 2) return variance = 0, 0.0;
-  VarianceBound bound;
-  const bool inside = da >= offsets.front() && da <= offsets.back();
-  if (inside && i < smooth.size() && smooth[i]) {
-    const SmoothResponse& r = *smooth[i];
-    const double value = r.at(da);
-    for (std::size_t j = 0; j < offsets.size(); ++j) bound.add(r.weight(j, da, value), shift_se[j][i]);
-    variance = bound.value();
-    return value;
-  }
-  // A straight line through the segment that holds da (the end segments extend beyond the sizes).
-  std::size_t k = 0;
-  while (k + 2 < offsets.size() && da > offsets[k + 1]) ++k;
-  const double w = (da - offsets[k]) / (offsets[k + 1] - offsets[k]);
-  bound.add(1 - w, shift_se[k][i]), bound.add(w, shift_se[k + 1][i]);
-  variance = bound.value();
-  return shift[k][i] + w * (shift[k + 1][i] - shift[k][i]);
-}
 
 Prediction Surface::predict(const ParameterSet& params, const DataFile& data) const {
   Prediction p = predict_fit(params);
@@ -349,13 +260,17 @@ Prediction Surface::predict(const ParameterSet& params, const DataFile& data) co
 Prediction Surface::predict_fit(const ParameterSet& params) const {
   Prediction p;
   const Eigen::VectorXd b = basis(scaled(*this, params), true);
+  const std::vector<std::vector<std::size_t>> shared = shared_nodes(*this);
   for (std::size_t i = 0; i < coef.size(); ++i) {
     double f = b.dot(coef[i]);
     double var = b.dot(cov[i] * b);
-    for (const EffectTerm& e : effects) {
+    for (std::size_t k = 0; k < effects.size(); ++k) {
+      const EffectTerm& e = effects[k];
+      const double da = params.get(e.key, e.neutral) - e.neutral;
       double v = 0;
-      f += e.response(i, params.get(e.key, e.neutral) - e.neutral, v);
+      f += e.response(i, da, v);
       var += v;
+      if (!shared[k].empty()) var += 2 * shared_covariance(*this, i, b.transpose() * node_weights[i], shared[k], e, da, v);
     }
     p.fit.push_back(f);
     p.se_fit.push_back(std::sqrt(std::max(var, 0.0)));

@@ -16,6 +16,7 @@
 #pragma once
 
 #include "calibrate/calibration.hpp"
+#include "calibrate/effect_term.hpp"
 
 #include <Eigen/Dense>
 
@@ -68,48 +69,6 @@ struct MeasurementRows {
 };
 MeasurementRows measurement_rows(const DataFile& data, const ParameterSet& params, const std::vector<std::string>& columns);
 
-// One point's response through an effect's measured sizes: a shape-preserving cubic (fit.cpp).
-struct SmoothResponse;
-
-// An effect term of the surface: the shift of every point's fit-scale value when
-// the effect's key moves from its neutral value, measured under common random
-// numbers at a few sizes and interpolated between them (extrapolated linearly
-// with the end segments). A candidate starts with one size (its physical step:
-// `slope` is its signature); an effect the loop adds is measured at more sizes
-// across its range, because few effects act linearly over it: a lateral tilt
-// moves where spheres leave linearly but slows the flow quadratically (J is even
-// in the tilt: the board mirrored is the same board).
-// Between the sizes: with four or more, a shape-preserving cubic (PCHIP, Boost.Math:
-// monotone where the measured shifts are, never beyond its neighbours; its end slopes from the
-// three end sizes, fit.cpp end_slope); with fewer, a straight line. A straight line through a curved response is biased toward
-// neutral: the tilt's quadratic J through 0, 2, 4, 6 deg reads 4.48 deg where 4.56
-// was planted, which blind passes 15-18 fitted (4.478 for 4.559 in pass 18's
-// tilt-high; 6 of 8 tilt intervals missed, all toward neutral).
-struct EffectTerm {
-  std::string effect, key;
-  double neutral = 0;             // the template's value (the term is 0 there)
-  double lo = 0, hi = 0;          // plausible range (key units)
-  std::vector<double> slope;      // per point: shift at the first step / step
-  std::vector<double> slope_se;   // per point (paired replicate differences)
-  std::vector<double> offsets;    // sizes measured, key - neutral, ascending, 0 included
-  std::vector<std::vector<double>> shift, shift_se;  // [size][point], fit scale (0 at offset 0)
-  std::vector<std::shared_ptr<const SmoothResponse>> smooth;  // [point] (4+ sizes, finite shifts; else null:
-                                                              // a straight line), made by add_size
-
-  // A term measured at one step: shift = slope * step.
-  static EffectTerm single_step(std::string effect, std::string key, double neutral, double lo, double hi, double step,
-                                std::vector<double> slope, std::vector<double> slope_se);
-  // Add the shifts measured at offset `da` (kept sorted); the interpolants are made anew.
-  void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at);
-  // Shift at point i for an offset da, and its variance: the largest over the sizes' errors'
-  // correlations in [0, 1] of the interpolant's weights on the sizes (for a straight line 1 - w and
-  // w; the cubic also leans on the next sizes, its weights by finite differences, the larger
-  // one-sided one where it is not smooth). Before 422ca03 (blind passes up to 20) the two neighbours'
-  // standard errors were interpolated linearly, which understated the cubic's by 14 % at 3 deg on the
-  // tilt's quadratic.
-  double response(std::size_t i, double da, double& variance) const;
-};
-
 // The model near the fit: quadratic in the free parameters, interpolated in each effect's size (EffectTerm), additive.
 struct Surface {
   std::vector<std::string> keys;      // free parameters
@@ -121,8 +80,19 @@ struct Surface {
   std::vector<EffectTerm> effects;    // added (fitted) effects
   std::optional<double> lack_of_fit;  // pooled reduced chi^2 of the nodes about the quadratic (> 1: cov widened by it);
                                       // none where no point had more nodes than coefficients
+  std::vector<ParameterSet> nodes;    // the nodes it goes through (empty for a surface made by hand)
+  std::vector<Eigen::MatrixXd> node_weights;     // per point: coef = node_weights * the nodes' fit values (a zero
+                                                 // column where a node has none)
+  std::vector<std::vector<double>> node_variance;  // per point, per node: its fit value's se^2 (0 where none)
 
   // Value, fit-scale value and its se at each point; params hold free keys and effect keys.
+  // The se counts the noise the quadratic and an effect's term share: a term whose shifts are
+  // paired with some of the surface's own nodes' runs (EffectTerm::paired_with; the first effect
+  // the loop adds, measured at the baseline's grid nodes) has those runs with a minus sign where the
+  // quadratic has them with a plus. Added as independent, as until this was found (blind pass 24
+  // replayed, results/calibration-blind-pass24/replay-fresh-points/), one free parameter's
+  // surface stated about 1.15 sigma^2 at its centre node where the prediction's variance is about
+  // 0.37 sigma^2 (sigma^2: one node's mean's variance; calibrate/README.md).
   Prediction predict(const ParameterSet& params, const DataFile& data) const;
   // The same with `value` left on the fit scale (no data file needed).
   Prediction predict_fit(const ParameterSet& params) const;

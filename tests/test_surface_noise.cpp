@@ -4,6 +4,7 @@
 #include "calibrate/data_file.hpp"
 #include "calibrate/fit.hpp"
 #include "calibrate/surface_noise.hpp"
+#include "common/statistics.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -110,6 +111,99 @@ TEST(SurfaceNoise, OnlyTheWindowsNodesCountAndIncompletePointsAreLeftOut) {
   EXPECT_EQ(surface_noise_check(design, base).all.points, all);
   base.grid_predictions[2].replicate_fit[fitted][5] = std::nan("");  // node 0.2: inside
   EXPECT_EQ(surface_noise_check(design, base).all.points, all - 1);
+}
+
+// A first effect's shifts are its runs less the baseline's own runs at the grid nodes nearest the
+// fit, the runs the surface's quadratic goes through (effect_responses.cpp); the prediction's se
+// counts what the two share (Surface::predict_fit). Monte Carlo over `draws` independent sets of
+// nodes (own noise only) and moved runs correlated `rho` with their partners (common random numbers),
+// the effect at its one measured size: the variance of the prediction over the draws, and the
+// stated one (mean se^2), each the mean over the points.
+struct PredictionVariance {
+  double observed = 0, stated = 0;
+};
+PredictionVariance prediction_variance(const DataFile& design, double rho, bool paired, int draws) {
+  const double own = 0.05, shift = 0.2;
+  const std::size_t points = design.points.size(), reps = static_cast<std::size_t>(design.model_replicates);
+  std::vector<double> sum(points, 0.0), sum2(points, 0.0), stated(points, 0.0);
+  for (int d = 0; d < draws; ++d) {
+    BaselineFit base = nodes_with(design, 0.0, own, 100 + static_cast<std::uint64_t>(d));
+    // The nodes weighted by their true se: with se's estimated from the same 12 runs the quadratic's
+    // weights are noisy too, and its variance exceeds what it states by about 8 % (0.53 against
+    // 0.49 sigma^2 here), with an effect or without; that is not what this checks.
+    for (Prediction& node : base.grid_predictions) node.se_fit.assign(points, own / std::sqrt(static_cast<double>(reps)));
+    base.surface = surface_around(design, base, base.surface_at);
+    Normal normal(5000 + static_cast<std::uint64_t>(d));
+    std::vector<double> mean, se;
+    std::vector<ParameterSet> near;
+    for (std::size_t k : nearest_nodes(base.grid, base.surface, base.params)) near.push_back(base.grid[k]);
+    for (std::size_t i = 0; i < points; ++i) {
+      std::vector<double> diffs;
+      for (std::size_t k : nearest_nodes(base.grid, base.surface, base.params)) {
+        const double f = base.grid[k].get(design.free.front().key, 0);
+        const double truth = 1.0 + 0.1 * static_cast<double>(i) + 2.0 * f - 3.0 * f * f;
+        for (std::size_t r = 0; r < reps; ++r) {
+          const double b = base.grid_predictions[k].replicate_fit[i][r];
+          const double m = rho * b + (1 - rho) * truth + shift + std::sqrt(1 - rho * rho) * own * normal();
+          diffs.push_back(m - b);
+        }
+      }
+      const Summary s = summarize(diffs);
+      mean.push_back(s.mean), se.push_back(s.se());
+    }
+    EffectTerm term = EffectTerm::single_step("e", "k", 0.0, 0.0, 1.0, 1.0, mean, se);
+    if (paired) term.paired_with = near;
+    base.surface.effects.push_back(term);
+    const Prediction p = base.surface.predict_fit(base.params.with("k", 1.0));
+    for (std::size_t i = 0; i < points; ++i)
+      sum[i] += p.fit[i], sum2[i] += p.fit[i] * p.fit[i], stated[i] += p.se_fit[i] * p.se_fit[i];
+  }
+  PredictionVariance out;
+  const double n = draws;
+  for (std::size_t i = 0; i < points; ++i) {
+    out.observed += (sum2[i] - sum[i] * sum[i] / n) / (n - 1) / static_cast<double>(points);
+    out.stated += stated[i] / n / static_cast<double>(points);
+  }
+  return out;
+}
+
+TEST(SurfaceNoise, AFirstEffectsShiftsPairedWithTheSurfacesOwnRunsShareTheirNoiseWithIt) {
+  const DataFile design = design_v3();
+  // sigma^2 = one node's mean's variance; the fit on the window's middle node (quadratic weights
+  // (-3, 12, 17, 12, -3)/35), the shift over its 3 nearest nodes. The prediction's variance is
+  // 0.371 sigma^2 at rho = 0 and 0.428 at 0.5; counted as independent, the quadratic's 0.486 and
+  // the shift's 2 (1 - rho)/3 add up to 1.15 and 0.82 (calibrate/README.md). Measured here:
+  // observed 0.371 and 0.424, stated 0.393 and 0.450 (without the shared part 1.178 and 0.843); the
+  // stated exceed the exact ones by the lack-of-fit widening, which scales the quadratic's variance
+  // by the nodes' pooled reduced chi^2 wherever that exceeds 1 by chance.
+  for (const double rho : {0.0, 0.5}) {
+    const PredictionVariance with = prediction_variance(design, rho, true, 200);
+    EXPECT_NEAR(with.stated / with.observed, 1.0, 0.1) << "rho " << rho;
+    const PredictionVariance without = prediction_variance(design, rho, false, 200);
+    EXPECT_GT(without.stated / without.observed, 1.6) << "rho " << rho;
+    EXPECT_NEAR(without.observed, with.observed, 1e-12);  // the same draws
+  }
+}
+
+TEST(SurfaceNoise, ATermPairedWithNodesOutsideTheSurfaceAddsItsVarianceAsIndependent) {
+  const DataFile design = design_v3();
+  BaselineFit base = nodes_with(design, 0.0, 0.05, 7);
+  const std::size_t points = design.points.size();
+  EffectTerm term = EffectTerm::single_step("e", "k", 0.0, 0.0, 1.0, 1.0, std::vector<double>(points, 0.2),
+                                            std::vector<double>(points, 0.03));
+  Surface alone = base.surface;
+  alone.effects.push_back(term);
+  term.paired_with = {base.grid[0], base.grid[8]};  // 0.1 and 0.5: outside the window 0.2-0.4
+  Surface outside = base.surface;
+  outside.effects.push_back(term);
+  const ParameterSet at = base.params.with("k", 0.6);
+  EXPECT_EQ(outside.predict_fit(at).se_fit, alone.predict_fit(at).se_fit);
+  term.paired_with = {base.grid[4]};  // 0.3: inside
+  Surface inside = base.surface;
+  inside.effects.push_back(term);
+  std::size_t fitted = 0;
+  while (design.points[fitted].held_out) ++fitted;
+  EXPECT_LT(inside.predict_fit(at).se_fit[fitted], alone.predict_fit(at).se_fit[fitted]);
 }
 
 }  // namespace

@@ -1,0 +1,164 @@
+#include "calibrate/effect_term.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+// Boost 1.74's pchip.hpp (Debian 12) calls isnan unqualified; later Boost qualifies it.
+using std::isnan;
+#include <boost/math/interpolators/pchip.hpp>
+
+namespace gapflow {
+
+// The cubic through one point's shifts, and the same cubic with each measured size's shift moved up
+// and down by `nudge` in turn: their differences at a size give the cubic's weights on the sizes, for
+// its variance. Both sides, since it is not linear in them and not everywhere smooth: its slopes are
+// harmonic means, and clamped to 0 where the secants turn, which is where an even response's end
+// slope at neutral sits (a tilt's: there the two sides' weights differ, 3.6 x at 0.5 deg on a
+// quadratic through 0, 2, 4, 6 deg, more toward neutral).
+struct SmoothResponse {
+  using Pchip = boost::math::interpolators::pchip<std::vector<double>>;
+  Pchip at;
+  std::vector<Pchip> up, down;  // [size]: the shift at that size moved up, down by nudge
+  double nudge = 0;             // fit scale
+
+  // The weight of size j at da: the one-sided one of larger magnitude.
+  double weight(std::size_t j, double da, double value) const {
+    const double above = (up[j](da) - value) / nudge, below = (value - down[j](da)) / nudge;
+    return std::abs(above) >= std::abs(below) ? above : below;
+  }
+};
+
+namespace {
+
+// The slope of a PCHIP at an end (x[0], or x[n-1] with `last`): the three-point formula (the
+// derivative there of the parabola through the three end sizes), kept shape-preserving (0 where it
+// points against the end segment; at most 3 times the end segment's slope where the segments turn),
+// as Fritsch and Carlson's and MATLAB's pchip do. Boost 1.74's default is the end segment's own
+// slope, which on a response even in its effect (a tilt's J: slope 0 at neutral) reads a quadratic's
+// 1 deg as 0.56, as biased toward neutral as a straight line.
+double end_slope(const std::vector<double>& x, const std::vector<double>& y, bool last) {
+  const std::size_t n = x.size();
+  const std::size_t a = last ? n - 1 : 0, b = last ? n - 2 : 1, c = last ? n - 3 : 2;
+  const double h0 = x[b] - x[a], h1 = x[c] - x[b];  // signed: negative from the last end
+  const double d0 = (y[b] - y[a]) / h0, d1 = (y[c] - y[b]) / h1;
+  const double d = ((2 * h0 + h1) * d0 - h0 * d1) / (h0 + h1);
+  if (d * d0 <= 0) return 0.0;
+  if (d0 * d1 < 0 && std::abs(d) > 3 * std::abs(d0)) return 3 * d0;
+  return d;
+}
+
+SmoothResponse::Pchip pchip_through(const std::vector<double>& x, std::vector<double> y) {
+  const double left = end_slope(x, y, false), right = end_slope(x, y, true);
+  return SmoothResponse::Pchip(std::vector<double>(x), std::move(y), left, right);
+}
+
+SmoothResponse smooth_response(const std::vector<double>& x, std::vector<double> y) {
+  double scale = 0;
+  for (double v : y) scale = std::max(scale, std::abs(v));
+  SmoothResponse r{pchip_through(x, y), {}, {}, 1e-7 * std::max(scale, 1e-9)};
+  for (std::size_t j = 0; j < y.size(); ++j) {
+    for (const double sign : {1.0, -1.0}) {
+      std::vector<double> moved = y;
+      moved[j] += sign * r.nudge;
+      (sign > 0 ? r.up : r.down).push_back(pchip_through(x, std::move(moved)));
+    }
+  }
+  return r;
+}
+
+// The largest variance of sum_j w_j e_j over the sizes' errors e_j (standard errors s_j) when their
+// correlations lie in [0, 1] (the sizes' shifts share the neutral runs and their seeds, which
+// correlates them positively; a negative correlation is not allowed for): it is linear in each
+// correlation, so the largest is at 1 where the two weights agree in sign and 0 where
+// they do not, (sum of w_j s_j over w_j > 0)^2 + (sum of |w_j| s_j over w_j < 0)^2. For a straight
+// line between two sizes this is ((1-w) sa + w sb)^2 (exact next to neutral, where sa = 0), and
+// beyond the end sizes (1-w)^2 va + w^2 vb. The independent case's variance, which dips to half at
+// mid-segment, drew fits to the sizes or away from them (pass 6). Where the cubic's weights differ
+// by side (SmoothResponse::weight), the larger of each: on the tilt's quadratic through 0, 2, 4 and
+// 6 deg this holds the spread of its value at 0.5-5 deg for correlations 0 and 1; with full
+// correlation the spread is 0.87 of it at 3 deg, 0.85 at 5, 0.47 at 1 and 0.23 at 0.5 (conservative
+// near neutral; EffectTermResponse.TheCubicsVarianceCountsEverySizeItLeansOn prints them).
+struct VarianceBound {
+  double positive = 0, negative = 0;
+  void add(double weight, double se) { (weight > 0 ? positive : negative) += std::abs(weight) * se; }
+  double value() const { return positive * positive + negative * negative; }
+};
+
+}  // namespace
+
+EffectTerm EffectTerm::single_step(std::string effect, std::string key, double neutral, double lo, double hi,
+                                   double step, std::vector<double> slope, std::vector<double> slope_se) {
+  EffectTerm t;
+  t.effect = std::move(effect), t.key = std::move(key), t.neutral = neutral, t.lo = lo, t.hi = hi;
+  t.offsets = {0.0};
+  t.shift = {std::vector<double>(slope.size(), 0.0)};
+  t.shift_se = t.shift;
+  t.slope = std::move(slope), t.slope_se = std::move(slope_se);
+  std::vector<double> at, se;
+  for (std::size_t i = 0; i < t.slope.size(); ++i) at.push_back(t.slope[i] * step), se.push_back(std::abs(t.slope_se[i] * step));
+  t.add_size(step, at, se);
+  return t;
+}
+
+void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<double> se_at) {
+  const auto k = static_cast<std::size_t>(std::lower_bound(offsets.begin(), offsets.end(), da) - offsets.begin());
+  if (k < offsets.size() && offsets[k] == da) {
+    shift[k] = std::move(shift_at), shift_se[k] = std::move(se_at);
+  } else {
+    offsets.insert(offsets.begin() + static_cast<std::ptrdiff_t>(k), da);
+    shift.insert(shift.begin() + static_cast<std::ptrdiff_t>(k), std::move(shift_at));
+    shift_se.insert(shift_se.begin() + static_cast<std::ptrdiff_t>(k), std::move(se_at));
+  }
+  smooth.assign(shift.front().size(), nullptr);
+  if (offsets.size() < 4) return;  // PCHIP needs four sizes
+  for (std::size_t i = 0; i < smooth.size(); ++i) {
+    std::vector<double> y;
+    for (const std::vector<double>& s : shift) y.push_back(s[i]);
+    if (!std::all_of(y.begin(), y.end(), [](double v) { return std::isfinite(v); })) continue;
+    smooth[i] = std::make_shared<const SmoothResponse>(smooth_response(offsets, std::move(y)));
+  }
+}
+
+std::vector<double> EffectTerm::weights(std::size_t i, double da, double& value) const {
+  std::vector<double> w(offsets.size(), 0.0);
+  const bool inside = da >= offsets.front() && da <= offsets.back();
+  if (inside && i < smooth.size() && smooth[i]) {
+    const SmoothResponse& r = *smooth[i];
+    value = r.at(da);
+    for (std::size_t j = 0; j < offsets.size(); ++j) w[j] = r.weight(j, da, value);
+    return w;
+  }
+  // A straight line through the segment that holds da (the end segments extend beyond the sizes).
+  std::size_t k = 0;
+  while (k + 2 < offsets.size() && da > offsets[k + 1]) ++k;
+  const double t = (da - offsets[k]) / (offsets[k + 1] - offsets[k]);
+  w[k] = 1 - t, w[k + 1] = t;
+  value = shift[k][i] + t * (shift[k + 1][i] - shift[k][i]);
+  return w;
+}
+
+double EffectTerm::response(std::size_t i, double da, double& variance) const {
+  if (offsets.size() < 2) return variance = 0, 0.0;
+  double value = 0;
+  const std::vector<double> w = weights(i, da, value);
+  VarianceBound bound;
+  for (std::size_t j = 0; j < offsets.size(); ++j) bound.add(w[j], shift_se[j][i]);
+  variance = bound.value();
+  return value;
+}
+
+// Each size's shift at point i is the mean, over N replicate pairs at the paired nodes (R at each),
+// of d = m - b: a moved run less the node's run on the same seed. With m and b of equal variance s^2
+// and correlation rho (common random numbers keep the packing, not the trajectory: rho is neither
+// 0 nor 1), Cov(b, d) = rho s^2 - s^2 = -Var(d)/2, whatever rho. A node's fit value is the mean of
+// its R runs, so its covariance with the shift is R (1/R) (1/N) Cov(b, d) = -Var(d)/(2N), that is
+// -shift_se^2/2, at every paired node alike. The interpolant is linear in the shifts.
+double EffectTerm::paired_covariance(std::size_t i, double da) const {
+  if (offsets.size() < 2 || paired_with.empty()) return 0.0;
+  double value = 0, covariance = 0;
+  const std::vector<double> w = weights(i, da, value);
+  for (std::size_t j = 0; j < offsets.size(); ++j) covariance -= w[j] * shift_se[j][i] * shift_se[j][i] / 2;
+  return covariance;
+}
+
+}  // namespace gapflow

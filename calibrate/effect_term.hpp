@@ -1,0 +1,70 @@
+// An effect term of a calibration's response surface: one effect's measured shifts of every
+// point, interpolated in its size (calibrate/fit.hpp puts it beside the free parameters' quadratic).
+#pragma once
+
+#include "calibrate/evaluator.hpp"
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace gapflow {
+
+// One point's response through an effect's measured sizes: a shape-preserving cubic (effect_term.cpp).
+struct SmoothResponse;
+
+// An effect term of the surface: the shift of every point's fit-scale value when
+// the effect's key moves from its neutral value, measured under common random
+// numbers at a few sizes and interpolated between them (extrapolated linearly
+// with the end segments). A candidate starts with one size (its physical step:
+// `slope` is its signature); an effect the loop adds is measured at more sizes
+// across its range, because few effects act linearly over it: a lateral tilt
+// moves where spheres leave linearly but slows the flow quadratically (J is even
+// in the tilt: the board mirrored is the same board).
+// Between the sizes: with four or more, a shape-preserving cubic (PCHIP, Boost.Math:
+// monotone where the measured shifts are, never beyond its neighbours; its end slopes from the
+// three end sizes, effect_term.cpp end_slope); with fewer, a straight line. A straight line through a curved response is biased toward
+// neutral: the tilt's quadratic J through 0, 2, 4, 6 deg reads 4.48 deg where 4.56
+// was planted, which blind passes 15-18 fitted (4.478 for 4.559 in pass 18's
+// tilt-high; 6 of 8 tilt intervals missed, all toward neutral).
+struct EffectTerm {
+  std::string effect, key;
+  double neutral = 0;             // the template's value (the term is 0 there)
+  double lo = 0, hi = 0;          // plausible range (key units)
+  std::vector<double> slope;      // per point: shift at the first step / step
+  std::vector<double> slope_se;   // per point (paired replicate differences)
+  std::vector<double> offsets;    // sizes measured, key - neutral, ascending, 0 included
+  std::vector<std::vector<double>> shift, shift_se;  // [size][point], fit scale (0 at offset 0)
+  std::vector<std::shared_ptr<const SmoothResponse>> smooth;  // [point] (4+ sizes, finite shifts; else null:
+                                                              // a straight line), made by add_size
+  // The nodes whose runs every size's shifts pair the moved runs with (replicate by replicate, on
+  // the data file's seeds); empty where those runs are on seeds of their own. Where they are
+  // baseline grid nodes, the surface's quadratic goes through the same runs, and the two parts of
+  // a prediction share their noise (Surface::predict_fit).
+  std::vector<ParameterSet> paired_with;
+
+  // A term measured at one step: shift = slope * step.
+  static EffectTerm single_step(std::string effect, std::string key, double neutral, double lo, double hi, double step,
+                                std::vector<double> slope, std::vector<double> slope_se);
+  // Add the shifts measured at offset `da` (kept sorted); the interpolants are made anew.
+  void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at);
+  // Shift at point i for an offset da, and its variance: the largest over the sizes' errors'
+  // correlations in [0, 1] of the interpolant's weights on the sizes (for a straight line 1 - w and
+  // w; the cubic also leans on the next sizes, its weights by finite differences, the larger
+  // one-sided one where it is not smooth). Before 422ca03 (blind passes up to 20) the two neighbours'
+  // standard errors were interpolated linearly, which understated the cubic's by 14 % at 3 deg on the
+  // tilt's quadratic.
+  double response(std::size_t i, double da, double& variance) const;
+  // The covariance of that shift with the mean of one paired node's runs at point i (each such
+  // node alike): -(sum_j w_j shift_se_j^2) / 2 over the interpolant's weights w_j (derived in
+  // effect_term.cpp). Negative: a node's runs enter the shift with a minus sign.
+  double paired_covariance(std::size_t i, double da) const;
+
+ private:
+  // The interpolant's weights on the sizes at offset da, and the shift there.
+  std::vector<double> weights(std::size_t i, double da, double& value) const;
+};
+
+
+}  // namespace gapflow
