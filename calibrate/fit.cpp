@@ -113,52 +113,47 @@ std::vector<double> scaled(const Surface& s, const ParameterSet& p) {
   return x;
 }
 
-// Every node of one point weighted alike, by the mean of their squared se's (their pooled
-// variance: the nodes have the same runs per point). Each node's own se comes from its few runs
-// (6 in the blind designs: its variance's estimate has 5 degrees of freedom), and weighted least
-// squares with weights that noisy both varies more and states less than it varies: by simulation,
-// five nodes of 6 runs, at the centre node 0.59 sigma^2 where it stated 0.39 (0.486 both with equal
-// weights; tests/test_surface_noise.cpp). Blind pass 24's baseline surfaces agreed with direct
-// simulation worse than their se said (results/calibration-blind-pass24/replay-shared-cov/).
-// The noise of one point varies little across the nodes of a surface.
-void pool_variance(std::vector<double>& se) {
-  double sum = 0;
-  for (double v : se) sum += v * v;
-  const double pooled = std::sqrt(sum / static_cast<double>(se.size()));
-  se.assign(se.size(), pooled);
-}
-
-// Weighted least squares of one point's fit-scale values over the nodes. Adds the
-// weighted lack of fit and its degrees of freedom to the running sums (pooled over
-// the points, since 5 nodes give one point too few to judge its own curve).
-// Returns the map from the nodes' values to the coefficients (padded like them).
+// Least squares of one point's fit-scale values over the nodes, every node weighted alike, and the
+// coefficients' covariance from each node's own variance, H diag(se^2) H^T (H: the map from the
+// nodes' values to the coefficients). Until af66c1c each node was weighted by its own se, from its
+// few runs (6 in the blind designs: 5 degrees of freedom), and weighted least squares with weights
+// that noisy varies more than equal weights and states less than it varies: simulated, five nodes of
+// 6 runs, the centre node, 0.59 sigma^2 where it stated 0.39 (equal weights: 0.486); blind pass 24's
+// baseline surfaces agreed with direct simulation worse than their se said
+// (results/calibration-blind-pass24/replay-shared-cov/). Here the se's enter the stated variance
+// linearly (unbiased) and the coefficients not at all, and a node noisier than the others (a clog
+// share near 0 or 1, a flow near clogging, at a corner of a 3 x 3 grid) still counts with its own
+// variance, which one variance pooled over the nodes would not do.
+// Adds the lack of fit, read against the nodes' mean variance, and its degrees of freedom to the
+// running sums (pooled over the points, since 5 nodes give one point too few to judge its own
+// curve); a point whose nodes have no noise adds none. Returns H, padded like the coefficients.
 Eigen::MatrixXd regress_point(Surface& s, const std::vector<std::vector<double>>& xs, const std::vector<double>& y,
                               const std::vector<double>& se, double& lack_sum, double& lack_dof) {
-  const std::size_t n = y.size();
-  const std::size_t p_quad = basis(xs.front(), true).size();
+  const auto n = static_cast<Eigen::Index>(y.size());
+  const auto p_quad = static_cast<Eigen::Index>(basis(xs.front(), true).size());
   const bool quadratic = n > p_quad;  // a quadratic needs more nodes than coefficients
   const Eigen::Index p = basis(xs.front(), quadratic).size();
-  Eigen::MatrixXd A(static_cast<Eigen::Index>(n), p);
-  Eigen::VectorXd b(static_cast<Eigen::Index>(n));
-  for (std::size_t r = 0; r < n; ++r) {
-    const double w = 1 / std::max(se[r], 1e-9);
-    A.row(static_cast<Eigen::Index>(r)) = w * basis(xs[r], quadratic).transpose();
-    b(static_cast<Eigen::Index>(r)) = w * y[r];
+  Eigen::MatrixXd X(n, p);
+  Eigen::VectorXd values(n), variance(n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    const auto k = static_cast<std::size_t>(r);
+    X.row(r) = basis(xs[k], quadratic).transpose();
+    values(r) = y[k];
+    variance(r) = se[k] * se[k];
   }
-  const Eigen::MatrixXd AtA = A.transpose() * A;
-  Eigen::VectorXd coef = AtA.ldlt().solve(A.transpose() * b);
-  Eigen::MatrixXd cov = AtA.inverse();
-  Eigen::VectorXd w(static_cast<Eigen::Index>(n));
-  for (std::size_t r = 0; r < n; ++r) w(static_cast<Eigen::Index>(r)) = 1 / std::max(se[r], 1e-9);
-  Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(p_quad), static_cast<Eigen::Index>(n));
-  weights.topRows(p) = cov * A.transpose() * w.asDiagonal();
-  if (static_cast<Eigen::Index>(n) > p) {
-    lack_sum += (A * coef - b).squaredNorm();
-    lack_dof += static_cast<double>(static_cast<Eigen::Index>(n) - p);
+  const Eigen::MatrixXd H = (X.transpose() * X).ldlt().solve(X.transpose());
+  Eigen::VectorXd coef = H * values;
+  Eigen::MatrixXd cov = H * variance.asDiagonal() * H.transpose();
+  const double mean_variance = variance.mean();
+  if (n > p && mean_variance > 0) {
+    lack_sum += (X * coef - values).squaredNorm() / mean_variance;
+    lack_dof += static_cast<double>(n - p);
   }
+  Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(p_quad, n);
+  weights.topRows(p) = H;
   if (!quadratic) {  // pad to the quadratic layout with zeros
-    Eigen::VectorXd c = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p_quad));
-    Eigen::MatrixXd v = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(p_quad), static_cast<Eigen::Index>(p_quad));
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(p_quad);
+    Eigen::MatrixXd v = Eigen::MatrixXd::Zero(p_quad, p_quad);
     c.head(p) = coef;
     v.topLeftCorner(p, p) = cov;
     coef = c, cov = v;
@@ -193,7 +188,6 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
     }
     s.valid.push_back(!xs.empty() && xs.size() * 2 >= nodes.size());
     if (xs.empty()) xs.push_back(scaled(s, nodes.front())), y.push_back(0), se.push_back(1);
-    pool_variance(se);
     const Eigen::MatrixXd weights = regress_point(s, xs, y, se, lack_sum, lack_dof);
     Eigen::MatrixXd per_node = Eigen::MatrixXd::Zero(weights.rows(), static_cast<Eigen::Index>(nodes.size()));
     std::vector<double> variance(nodes.size(), 0.0);

@@ -7,7 +7,7 @@
 // fitted point scored chi^2/nu 0.91 on its own seeds and 3.15 on fresh ones (the
 // optimiser had chased noise; calibrate/README.md). Instead, every point's
 // prediction (fit scale) is regressed on the free parameters over a grid of
-// nodes (a quadratic, weighted by each node's standard error), and each effect
+// nodes (a quadratic, every node weighted alike, its variance from each node's own), and each effect
 // adds a term, a shape-preserving interpolant in its size, measured by finite differences at the nodes
 // next to the fit, under common random numbers. The surface is smooth (between an
 // effect's measured sizes); NLopt's BOBYQA minimises its deviance (below), and profiles

@@ -525,14 +525,14 @@ TEST(CalibrationSynthetic, TheHeldOutRouteTracesAResidualOnlyTheHeldOutPointsSho
 }
 
 // The route keeps rule 1's condition on the candidate. On null twins whose fitted points pass and
-// whose held-out points do not (of twin seeds 1-21 of this design, seeds 5 and 16; 6 was one until
-// the surface weighted its nodes alike, and 7-15 and 17-21 are not; the closed-form
+// whose held-out points do not (of twin seeds 1-30 of this design, seeds 12 and 16; until the
+// surface weighted its nodes alike, 5 and 6 of 1-8; the closed-form
 // model's noise is mostly common to every parameter value, which the surface understates about
 // 2x: calibrate/surface_noise.hpp), the route considers the round, no candidate's score is
 // significant, and nothing is tried or added. (A null on which a candidate is significant too,
 // where the keep test would have to reject, was not found among these seeds.)
 TEST(CalibrationSynthetic, TheHeldOutRouteTriesNothingOnANullTwinWithoutASignificantCandidate) {
-  for (std::uint64_t seed : {5u, 16u}) {
+  for (std::uint64_t seed : {12u, 16u}) {
     TempDir dir("gapflow_calibration_synthetic_route_null");
     const SyntheticRun run = calibrate_synthetic(
         dir, {}, 1, {.twin_seed = seed, .model_seed = 100 + seed, .shallow_held_out = true, .held_out_route = true});
