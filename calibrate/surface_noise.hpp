@@ -12,8 +12,9 @@
 // between any two nodes' replicates, spread / reported = 1 + rho (1/h - 1): that gives rho. The
 // factor by which the surface understates the model's variance at the baseline fit x0 is then
 // 1 + rho (1/h(x0) - 1): small where the fit sits on an end node (h = 31/35). That factor is the
-// equally weighted surface's; the loop's own weights each node by its own standard error, so for
-// the loop it is an estimate. Diagnostic only: no decision of the loop reads it.
+// equally weighted surface's, as the loop's is since af66c1c (until then it weighted each node by
+// its own standard error, for which this was an estimate). Diagnostic only: no decision of the
+// loop reads it.
 #pragma once
 
 #include "calibrate/fit.hpp"

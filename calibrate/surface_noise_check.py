@@ -1,10 +1,12 @@
 #!/usr/bin/python3
 """Why the model's noise at the baseline fell less than 1/replicates (calibrate/README.md, "The model's own noise is part of every test").
 
-The loop predicts each point through a quadratic in the free parameter, fitted through the 5 grid
-nodes around the best node by chi^2 and weighted by each node's own standard error, estimated
-from that node's replicates, its covariance widened by the pooled lack of fit where that exceeds 1
-(calibrate/fit.cpp: fit_baseline, window, regress_point, build_surface). The prediction's variance
+The loop up to af66c1c (which this script describes; the passes it reads were made by it) predicted
+each point through a quadratic in the free parameter, fitted through the 5 grid nodes around the
+best node by chi^2 and weighted by each node's own standard error, estimated from that node's
+replicates, its covariance widened by the pooled lack of fit where that exceeds 1
+(calibrate/fit.cpp: fit_baseline, window, regress_point, build_surface). Since then every node
+weighs alike and the variance comes from each node's own (calibrate/README.md, step 1). The prediction's variance
 at 2n replicates differs from half that at n through:
   1. the leverage: the baseline falls elsewhere among the nodes in the two fits;
   2. the weights: 1/s^2 from a few replicates is biased high (for normal scatter with k degrees of
