@@ -137,28 +137,24 @@ std::vector<double> EffectTerm::weights(std::size_t i, double da, double& value)
   return w;
 }
 
-double EffectTerm::response(std::size_t i, double da, double& variance) const {
+// The paired covariance: each size's shift at point i is the mean, over N replicate pairs at the
+// paired nodes (R at each), of d = m - b: a moved run less the node's run on the same seed. With m
+// and b of equal variance s^2 and correlation rho (common random numbers keep the packing, not the
+// trajectory: rho is neither 0 nor 1), Cov(b, d) = rho s^2 - s^2 = -Var(d)/2, whatever rho. A node's
+// fit value is the mean of its R runs, so its covariance with the shift is R (1/R) (1/N) Cov(b, d) =
+// -Var(d)/(2N), that is -shift_se^2/2, at every paired node alike. The interpolant is linear in the
+// shifts.
+double EffectTerm::response(std::size_t i, double da, double& variance, double* paired_covariance) const {
+  if (paired_covariance) *paired_covariance = 0;
   if (offsets.size() < 2) return variance = 0, 0.0;
   double value = 0;
   const std::vector<double> w = weights(i, da, value);
   VarianceBound bound;
   for (std::size_t j = 0; j < offsets.size(); ++j) bound.add(w[j], shift_se[j][i]);
   variance = bound.value();
+  if (paired_covariance && !paired_with.empty())
+    for (std::size_t j = 0; j < offsets.size(); ++j) *paired_covariance -= w[j] * shift_se[j][i] * shift_se[j][i] / 2;
   return value;
-}
-
-// Each size's shift at point i is the mean, over N replicate pairs at the paired nodes (R at each),
-// of d = m - b: a moved run less the node's run on the same seed. With m and b of equal variance s^2
-// and correlation rho (common random numbers keep the packing, not the trajectory: rho is neither
-// 0 nor 1), Cov(b, d) = rho s^2 - s^2 = -Var(d)/2, whatever rho. A node's fit value is the mean of
-// its R runs, so its covariance with the shift is R (1/R) (1/N) Cov(b, d) = -Var(d)/(2N), that is
-// -shift_se^2/2, at every paired node alike. The interpolant is linear in the shifts.
-double EffectTerm::paired_covariance(std::size_t i, double da) const {
-  if (offsets.size() < 2 || paired_with.empty()) return 0.0;
-  double value = 0, covariance = 0;
-  const std::vector<double> w = weights(i, da, value);
-  for (std::size_t j = 0; j < offsets.size(); ++j) covariance -= w[j] * shift_se[j][i] * shift_se[j][i] / 2;
-  return covariance;
 }
 
 }  // namespace gapflow

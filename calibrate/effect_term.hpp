@@ -55,11 +55,11 @@ struct EffectTerm {
   // one-sided one where it is not smooth). Before 422ca03 (blind passes up to 20) the two neighbours'
   // standard errors were interpolated linearly, which understated the cubic's by 14 % at 3 deg on the
   // tilt's quadratic.
-  double response(std::size_t i, double da, double& variance) const;
-  // The covariance of that shift with the mean of one paired node's runs at point i (each such
-  // node alike): -(sum_j w_j shift_se_j^2) / 2 over the interpolant's weights w_j (derived in
-  // effect_term.cpp). Negative: a node's runs enter the shift with a minus sign.
-  double paired_covariance(std::size_t i, double da) const;
+  // With `paired_covariance`, also the covariance of that shift with the mean of one paired node's
+  // runs at point i (each such node alike; 0 without paired nodes): -(sum_j w_j shift_se_j^2) / 2
+  // over the same weights w_j (derived in effect_term.cpp). Negative: a node's runs enter the shift
+  // with a minus sign.
+  double response(std::size_t i, double da, double& variance, double* paired_covariance = nullptr) const;
 
  private:
   // The interpolant's weights on the sizes at offset da, and the shift there.

@@ -117,8 +117,9 @@ std::vector<double> scaled(const Surface& s, const ParameterSet& p) {
 // coefficients' covariance from each node's own variance, H diag(se^2) H^T (H: the map from the
 // nodes' values to the coefficients). Until af66c1c each node was weighted by its own se, from its
 // few runs (6 in the blind designs: 5 degrees of freedom), and weighted least squares with weights
-// that noisy varies more than equal weights and states less than it varies: simulated, five nodes of
-// 6 runs, the centre node, 0.59 sigma^2 where it stated 0.39 (equal weights: 0.486); blind pass 24's
+// that noisy varies more than equal weights and states less than it varies: simulated
+// (calibrate/wls_weights_check.py), five nodes of 6 runs, the centre node, 0.59 sigma^2 where it
+// stated 0.39 (equal weights: 0.486); blind pass 24's
 // baseline surfaces agreed with direct simulation worse than their se said
 // (results/calibration-blind-pass24/replay-shared-cov/). Here the se's enter the stated variance
 // linearly (unbiased) and the coefficients not at all, and a node noisier than the others (a clog
@@ -241,13 +242,13 @@ std::vector<std::vector<std::size_t>> shared_nodes(const Surface& s) {
   return out;
 }
 
-// The covariance of the quadratic's value (its node weights at x: `at_x`) with effect e's shift at
+// The covariance of the quadratic's value (its node weights at x: `at_x`) with an effect's shift at
 // point i, whose variance is `shift_variance`: the paired nodes' weights times the covariance of
-// one node's mean with the shift. Held within the Cauchy-Schwarz bound of the two parts it links
-// (the shared nodes' share of the quadratic and the shift), so that the se's estimates, each from
-// a few runs, can never make the sum's variance negative.
+// one node's mean with the shift (`paired`, EffectTerm::response). Held within the Cauchy-Schwarz
+// bound of the two parts it links (the shared nodes' share of the quadratic and the shift), so that
+// the se's estimates, each from a few runs, can never make the sum's variance negative.
 double shared_covariance(const Surface& s, std::size_t i, const Eigen::RowVectorXd& at_x, const std::vector<std::size_t>& shared,
-                         const EffectTerm& e, double da, double shift_variance) {
+                         double paired, double shift_variance) {
   double weight = 0, shared_variance = 0;
   for (std::size_t n : shared) {
     const double c = at_x(static_cast<Eigen::Index>(n));
@@ -255,7 +256,7 @@ double shared_covariance(const Surface& s, std::size_t i, const Eigen::RowVector
     shared_variance += c * c * s.node_variance[i][n];
   }
   const double bound = std::sqrt(shared_variance * shift_variance);
-  return std::clamp(weight * e.paired_covariance(i, da), -bound, bound);
+  return std::clamp(weight * paired, -bound, bound);
 }
 
 }  // namespace
@@ -277,10 +278,10 @@ Prediction Surface::predict_fit(const ParameterSet& params) const {
     for (std::size_t k = 0; k < effects.size(); ++k) {
       const EffectTerm& e = effects[k];
       const double da = params.get(e.key, e.neutral) - e.neutral;
-      double v = 0;
-      f += e.response(i, da, v);
+      double v = 0, paired = 0;
+      f += e.response(i, da, v, shared[k].empty() ? nullptr : &paired);
       var += v;
-      if (!shared[k].empty()) var += 2 * shared_covariance(*this, i, b.transpose() * node_weights[i], shared[k], e, da, v);
+      if (!shared[k].empty()) var += 2 * shared_covariance(*this, i, b.transpose() * node_weights[i], shared[k], paired, v);
     }
     p.fit.push_back(f);
     p.se_fit.push_back(std::sqrt(std::max(var, 0.0)));
