@@ -558,6 +558,7 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   const SurfaceNoiseCheck surface_noise = surface_noise_check(data, base);
   out.surface_noise_ratio = surface_noise.all.understated;
   out.node_correlation = surface_noise.all.correlation;
+  out.surface_noise_counted = surface_noise.all.counted;
   loop.say(surface_noise_text(surface_noise));
 
   const std::vector<std::string> correlations = shared_run_correlations(data, base);

@@ -183,8 +183,9 @@ struct CalibrationResult {
   double law_power = NAN;
   bool law_undetermined = false;
   double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)
-  double surface_noise_ratio = NAN;  // the baseline's true model variance over what the surface reports, and
-  double node_correlation = NAN;     // the replicates' correlation between nodes it comes from (surface_noise.hpp)
+  double surface_noise_ratio = NAN;  // the baseline's true model variance over what independent nodes give, and
+  double node_correlation = NAN;     // the replicates' correlation between nodes it comes from (surface_noise.hpp);
+  double surface_noise_counted = NAN;  // the factor the surface counts there (node_correlation.hpp; 1 before it did)
   // The held-out points after everything (fresh seeds), their chi^2 with the fitted parameters'
   // uncertainty carried to them (attribution.hpp held_out_chi_square): the verdict's test.
   ChiSquare held_out_fresh_fit_aware;

@@ -150,9 +150,9 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                               json_string(f.key), json_number(f.measured), json_number(f.measured_se));
   o << "  \"measured_free\": [" << measured << "],\n";
   o << fmt::format("  \"model_replicates\": {},\n  \"model_noise_share\": {},\n  \"surface_noise_ratio\": {},\n"
-                   "  \"node_correlation\": {},\n",
+                   "  \"node_correlation\": {},\n  \"surface_noise_counted\": {},\n",
                    data.model_replicates, json_number(r.model_noise_share), json_number(r.surface_noise_ratio),
-                   json_number(r.node_correlation));
+                   json_number(r.node_correlation), json_number(r.surface_noise_counted));
   o << fmt::format("  \"contenders\": {},\n", r.contenders);
   o << fmt::format("  \"alternatives\": {},\n", r.alternatives);
   o << fmt::format("  \"decisive_score_p\": {},\n", r.decisive_score_p);

@@ -1,5 +1,6 @@
 #include "calibrate/fit.hpp"
 
+#include "calibrate/node_correlation.hpp"
 #include "common/statistics.hpp"
 
 #include <fmt/format.h>
@@ -114,40 +115,40 @@ std::vector<double> scaled(const Surface& s, const ParameterSet& p) {
 }
 
 // Least squares of one point's fit-scale values over the nodes, every node weighted alike, and the
-// coefficients' covariance from each node's own variance, H diag(se^2) H^T (H: the map from the
-// nodes' values to the coefficients). Until af66c1c each node was weighted by its own se, from its
-// few runs (6 in the blind designs: 5 degrees of freedom), and weighted least squares with weights
-// that noisy varies more than equal weights and states less than it varies: simulated
-// (calibrate/wls_weights_check.py), five nodes of 6 runs, the centre node, 0.59 sigma^2 where it
-// stated 0.39 (equal weights: 0.486); blind pass 24's
-// baseline surfaces agreed with direct simulation worse than their se said
-// (results/calibration-blind-pass24/replay-shared-cov/). Here the se's enter the stated variance
-// linearly (unbiased) and the coefficients not at all, and a node noisier than the others (a clog
-// share near 0 or 1, a flow near clogging, at a corner of a 3 x 3 grid) still counts with its own
-// variance, which one variance pooled over the nodes would not do.
-// Adds the lack of fit, read against the nodes' mean variance, and its degrees of freedom to the
-// running sums (pooled over the points, since 5 nodes give one point too few to judge its own
-// curve); a point whose nodes have no noise adds none. Returns H, padded like the coefficients.
+// coefficients' covariance H Sigma H^T from the nodes' covariance Sigma (H: the map from the nodes'
+// values to the coefficients; Sigma: each node's own se^2 on the diagonal, off it the correlation of
+// the replicates between nodes, calibrate/node_correlation.hpp). Until af66c1c each node was weighted
+// by its own se, from its few runs (6 in the blind designs: 5 degrees of freedom), and weighted least
+// squares with weights that noisy varies more than equal weights and states less than it varies:
+// simulated (calibrate/wls_weights_check.py), five nodes of 6 runs, the centre node, 0.59 sigma^2
+// where it stated 0.39 (equal weights: 0.486). Here the se's enter the stated variance linearly
+// (unbiased) and the coefficients not at all, and a node noisier than the others (a clog share near 0
+// or 1, a flow near clogging, at a corner of a 3 x 3 grid) still counts with its own variance, which
+// one variance pooled over the nodes would not do.
+// Adds the lack of fit and its degrees of freedom to the running sums (pooled over the points, since
+// 5 nodes give one point too few to judge its own curve): the residual sum of squares over what the
+// nodes' noise alone would give it, tr((I - X H) Sigma) / (n - p) per degree of freedom (a shared
+// error that the quadratic absorbs leaves no residual); a point whose nodes have no noise adds none.
+// Returns H, padded like the coefficients.
 Eigen::MatrixXd regress_point(Surface& s, const std::vector<std::vector<double>>& xs, const std::vector<double>& y,
-                              const std::vector<double>& se, double& lack_sum, double& lack_dof) {
+                              const Eigen::MatrixXd& node_cov, double& lack_sum, double& lack_dof) {
   const auto n = static_cast<Eigen::Index>(y.size());
   const auto p_quad = static_cast<Eigen::Index>(basis(xs.front(), true).size());
   const bool quadratic = n > p_quad;  // a quadratic needs more nodes than coefficients
   const Eigen::Index p = basis(xs.front(), quadratic).size();
   Eigen::MatrixXd X(n, p);
-  Eigen::VectorXd values(n), variance(n);
+  Eigen::VectorXd values(n);
   for (Eigen::Index r = 0; r < n; ++r) {
     const auto k = static_cast<std::size_t>(r);
     X.row(r) = basis(xs[k], quadratic).transpose();
     values(r) = y[k];
-    variance(r) = se[k] * se[k];
   }
   const Eigen::MatrixXd H = (X.transpose() * X).ldlt().solve(X.transpose());
   Eigen::VectorXd coef = H * values;
-  Eigen::MatrixXd cov = H * variance.asDiagonal() * H.transpose();
-  const double mean_variance = variance.mean();
-  if (n > p && mean_variance > 0) {
-    lack_sum += (X * coef - values).squaredNorm() / mean_variance;
+  Eigen::MatrixXd cov = H * node_cov * H.transpose();
+  const double residual_noise = ((Eigen::MatrixXd::Identity(n, n) - X * H) * node_cov).trace();
+  if (n > p && residual_noise > 0) {
+    lack_sum += (X * coef - values).squaredNorm() / (residual_noise / static_cast<double>(n - p));
     lack_dof += static_cast<double>(n - p);
   }
   Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(p_quad, n);
@@ -164,6 +165,19 @@ Eigen::MatrixXd regress_point(Surface& s, const std::vector<std::vector<double>>
   return weights;
 }
 
+// The covariance of the used nodes' values: their correlation (over every node of the surface) times their se's.
+Eigen::MatrixXd node_covariance(const Eigen::MatrixXd& correlation, const std::vector<std::size_t>& used,
+                                const std::vector<double>& se) {
+  const auto n = static_cast<Eigen::Index>(used.size());
+  Eigen::MatrixXd cov(n, n);
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index b = 0; b < n; ++b)
+      cov(a, b) = (a == b ? 1.0 : correlation(static_cast<Eigen::Index>(used[static_cast<std::size_t>(a)]),
+                                                static_cast<Eigen::Index>(used[static_cast<std::size_t>(b)]))) *
+                  se[static_cast<std::size_t>(a)] * se[static_cast<std::size_t>(b)];
+  return cov;
+}
+
 Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nodes, const std::vector<Prediction>& preds) {
   Surface s;
   for (const FreeParameter& f : data.free) {
@@ -175,6 +189,7 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
     s.half.push_back(std::max((hi - lo) / 2, 1e-12));
   }
   s.nodes = nodes;
+  const NodeCorrelations correlation = node_correlations(data, nodes, preds);
   double lack_sum = 0, lack_dof = 0;
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     std::vector<std::vector<double>> xs;
@@ -188,8 +203,9 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
       used.push_back(n);
     }
     s.valid.push_back(!xs.empty() && xs.size() * 2 >= nodes.size());
+    const Eigen::MatrixXd cov = used.empty() ? Eigen::MatrixXd::Identity(1, 1) : node_covariance(correlation.at(i), used, se);
     if (xs.empty()) xs.push_back(scaled(s, nodes.front())), y.push_back(0), se.push_back(1);
-    const Eigen::MatrixXd weights = regress_point(s, xs, y, se, lack_sum, lack_dof);
+    const Eigen::MatrixXd weights = regress_point(s, xs, y, cov, lack_sum, lack_dof);
     Eigen::MatrixXd per_node = Eigen::MatrixXd::Zero(weights.rows(), static_cast<Eigen::Index>(nodes.size()));
     std::vector<double> variance(nodes.size(), 0.0);
     for (std::size_t u = 0; u < used.size(); ++u) {
@@ -290,6 +306,13 @@ Prediction Surface::predict_fit(const ParameterSet& params) const {
     p.replicate_fit.emplace_back();
   }
   return p;
+}
+
+double Surface::independent_nodes_variance(const ParameterSet& params, std::size_t i) const {
+  const Eigen::RowVectorXd at_x = basis(scaled(*this, params), true).transpose() * node_weights[i];
+  double v = 0;
+  for (std::size_t n = 0; n < node_variance[i].size(); ++n) v += at_x(static_cast<Eigen::Index>(n)) * at_x(static_cast<Eigen::Index>(n)) * node_variance[i][n];
+  return v;
 }
 
 std::vector<double> Surface::derivative(const ParameterSet& params, std::size_t k) const {
@@ -495,11 +518,20 @@ std::vector<std::size_t> surface_window(const DataFile& data, const BaselineFit&
   return {first, first + 1, first + 2, first + 3, first + 4};
 }
 
+namespace {
+
+std::vector<Prediction> window_predictions(const DataFile& data, const BaselineFit& base, const ParameterSet& at) {
+  std::vector<Prediction> preds;
+  for (std::size_t k : surface_window(data, base, at)) preds.push_back(base.grid_predictions[k]);
+  return preds;
+}
+
+}  // namespace
+
 Surface surface_around(const DataFile& data, const BaselineFit& base, const ParameterSet& at) {
   std::vector<ParameterSet> nodes;  // without free parameters the grid is one empty set: the surface is a constant
-  std::vector<Prediction> preds;
-  for (std::size_t k : surface_window(data, base, at)) nodes.push_back(base.grid[k]), preds.push_back(base.grid_predictions[k]);
-  return build_surface(data, nodes, preds);
+  for (std::size_t k : surface_window(data, base, at)) nodes.push_back(base.grid[k]);
+  return build_surface(data, nodes, window_predictions(data, base, at));
 }
 
 bool at_inner_bound(const Surface& s, const BaselineFit& base, const ParameterSet& p) {
@@ -546,6 +578,7 @@ BaselineFit fit_baseline(const DataFile& data, const CalibrationDef& def, Evalua
   say(fmt::format("  response surface through {} node(s); its minimum deviance at {} (chi2 = {:.2f}{}){}", surface_nodes,
                   out.params.label(), fitted_chi2(data, out.surface.predict(out.params, data), out.params),
                   measured_count(data) > 0 ? ", the measurements included" : "", lack_of_fit_text(out.surface)));
+  say(node_correlation_text(node_correlations(data, out.surface.nodes, window_predictions(data, out, grid[best]))));
   return out;
 }
 

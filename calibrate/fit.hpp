@@ -7,7 +7,8 @@
 // fitted point scored chi^2/nu 0.91 on its own seeds and 3.15 on fresh ones (the
 // optimiser had chased noise; calibrate/README.md). Instead, every point's
 // prediction (fit scale) is regressed on the free parameters over a grid of
-// nodes (a quadratic, every node weighted alike, its variance from each node's own), and each effect
+// nodes (a quadratic, every node weighted alike, its variance from each node's own and from the
+// replicates' correlation between nodes, calibrate/node_correlation.hpp), and each effect
 // adds a term, a shape-preserving interpolant in its size, measured by finite differences at the nodes
 // next to the fit, under common random numbers. The surface is smooth (between an
 // effect's measured sizes); NLopt's BOBYQA minimises its deviance (below), and profiles
@@ -96,6 +97,10 @@ struct Surface {
   Prediction predict(const ParameterSet& params, const DataFile& data) const;
   // The same with `value` left on the fit scale (no data file needed).
   Prediction predict_fit(const ParameterSet& params) const;
+  // The quadratic's variance at point i as if its nodes' values were independent (each node's se^2 times
+  // its weight squared), without the lack-of-fit widening: what the surface stated until the
+  // replicates' correlation between nodes was counted (calibrate/surface_noise.hpp compares the two).
+  double independent_nodes_variance(const ParameterSet& params, std::size_t i) const;
   // d(fit)/d(key) of a free parameter at `params`, per point.
   std::vector<double> derivative(const ParameterSet& params, std::size_t k) const;
 };

@@ -49,16 +49,18 @@ double unwidened_variance(const Surface& s, const Prediction& p, std::size_t i) 
 
 struct Sums {
   int points = 0;
-  double spread = 0, reported = 0;  // summed over the points, at the window's middle node
+  double spread = 0, independent = 0;  // summed over the points, at the window's middle node
+  double counted = 0, independent_fit = 0;  // the surface's variance and independent nodes', at the baseline fit
 };
 
 SurfaceNoiseGroup estimate(std::string name, const Sums& s, double h_middle, double h_fit) {
   SurfaceNoiseGroup g;
   g.name = std::move(name);
   g.points = s.points;
-  if (s.points == 0 || !(s.reported > 0) || !(h_middle < 1)) return g;
-  g.correlation = (s.spread / s.reported - 1) / (1 / h_middle - 1);
+  if (s.points == 0 || !(s.independent > 0) || !(h_middle < 1)) return g;
+  g.correlation = (s.spread / s.independent - 1) / (1 / h_middle - 1);
   g.understated = 1 + g.correlation * (1 / h_fit - 1);
+  if (s.independent_fit > 0) g.counted = s.counted / s.independent_fit;
   return g;
 }
 
@@ -83,24 +85,27 @@ SurfaceNoiseCheck surface_noise_check(const DataFile& data, const BaselineFit& b
         surface_around(data, replicate_nodes(window, points, n, static_cast<int>(r)), middle).predict_fit(middle));
   const BaselineFit means = replicate_nodes(window, points, n, -1);
   const Surface mean_surface = surface_around(data, means, middle);
-  const Prediction at_middle = mean_surface.predict_fit(middle), at_fit = mean_surface.predict_fit(base.params);
+  const Prediction at_fit = mean_surface.predict_fit(base.params);
 
   Sums all;
   std::map<std::string, Sums> by_observable;
   double h_middle = NAN, h_fit = NAN;
   for (std::size_t i = 0; i < points; ++i) {
     if (data.points[i].held_out || !complete(window.grid_predictions, i, n)) continue;
-    const double reported = unwidened_variance(mean_surface, at_middle, i);
-    if (!(reported > 0)) continue;
+    const double independent = mean_surface.independent_nodes_variance(middle, i);
+    if (!(independent > 0)) continue;
     std::vector<double> fits;
     for (const Prediction& p : per_replicate) fits.push_back(p.fit[i]);
     const double spread = std::pow(summarize(fits).se(), 2);
     // One free parameter and every node of a point weighted alike: the leverage is the same at every point.
     const double pooled = std::pow(means.grid_predictions.front().se_fit[i], 2);  // a node's variance
-    h_middle = reported / pooled;
-    h_fit = unwidened_variance(mean_surface, at_fit, i) / pooled;
-    for (Sums* s : {&all, &by_observable[to_string(data.points[i].observable)]})
-      ++s->points, s->spread += spread, s->reported += reported;
+    h_middle = independent / pooled;
+    const double independent_fit = mean_surface.independent_nodes_variance(base.params, i);
+    h_fit = independent_fit / pooled;
+    for (Sums* s : {&all, &by_observable[to_string(data.points[i].observable)]}) {
+      ++s->points, s->spread += spread, s->independent += independent;
+      s->counted += unwidened_variance(mean_surface, at_fit, i), s->independent_fit += independent_fit;
+    }
   }
   if (all.points == 0) return c.problem = "no fitted point has every model replicate at every node", c;
   c.all = estimate("all", all, h_middle, h_fit);
@@ -112,19 +117,20 @@ std::string surface_noise_text(const SurfaceNoiseCheck& c) {
   if (!c.problem.empty()) return "surface noise check: not made (" + c.problem + ")";
   std::string s = fmt::format(
       "surface noise check: the model replicates correlate {:+.2f} between grid nodes (from the spread of a surface "
-      "fitted to each replicate alone, {} fitted points; independent nodes give about 0), so at the baseline the "
-      "surface understates the model's variance {:.2f} x",
-      c.all.correlation, c.all.points, c.all.understated);
+      "fitted to each replicate alone, {} fitted points; independent nodes give about 0), so at the baseline "
+      "independent nodes would understate the model's variance {:.2f} x; the surface counts {:.2f} x (the "
+      "correlation pooled over each observable's points)",
+      c.all.correlation, c.all.points, c.all.understated, c.all.counted);
   std::vector<std::string> parts, high;
   for (const SurfaceNoiseGroup& g : c.by_observable) {
-    parts.push_back(fmt::format("{} {:+.2f} ({:.2f} x)", g.name, g.correlation, g.understated));
-    if (g.understated > kUnderstatedNote) high.push_back(g.name);
+    parts.push_back(fmt::format("{} {:+.2f} ({:.2f} x, counted {:.2f} x)", g.name, g.correlation, g.understated, g.counted));
+    if (g.understated / g.counted > kUnderstatedNote) high.push_back(g.name);
   }
   if (c.by_observable.size() > 1) s += fmt::format("; by observable: {}", fmt::join(parts, ", "));
   if (!high.empty())
-    s += fmt::format(". Above {:.1f} x ({}): the same seeds at every node keep those replicates correlated between "
-                     "nodes, and the loop's tests take the model's noise there as smaller than it is (calibrate/"
-                     "README.md, \"The model's own noise is part of every test\")",
+    s += fmt::format(". Above {:.1f} x what the surface counts ({}): the replicates correlate between nodes more "
+                     "than their pooled correlation says, and the loop's tests take the model's noise there as smaller "
+                     "than it is (calibrate/README.md, \"The model's own noise is part of every test\")",
                      kUnderstatedNote, fmt::join(high, ", "));
   return s;
 }

@@ -1,20 +1,23 @@
-// Is the response surface's model noise what the runs show? The surface reports each point's
-// variance as if its nodes were independent (fit.cpp, regress_point). Common random numbers run
-// the same seeds at every node, and an observable that the seeds still govern when the parameter
-// moves (the time to the first crossing in blind pass 15's store) keeps an error the nodes share,
-// which does not average out over them.
+// Is the response surface's model noise what the runs show? Common random numbers run the same
+// seeds at every node, and an observable that the seeds still govern when the parameter moves (the
+// time to the first crossing) keeps an error the nodes share, which does not average out over them.
+// The surface counts it from the replicates' correlation between nodes, pooled over each
+// observable's points (calibrate/node_correlation.hpp); until that (blind pass 24 replayed,
+// results/calibration-blind-pass24/replay-node-variance/) it took its nodes as independent.
 //
-// The check fits the baseline's surface (the same window of nodes) to each model replicate's
-// values alone, every node of a point weighted alike, and compares the spread of those fits with
-// the variance the same surface reports from the replicates' pooled variance, at the window's
-// middle node, where a shared error shows most (there the reported variance is the leverage h
-// times a node's, 17/35 for five nodes, while a shared error passes whole). With a correlation rho
-// between any two nodes' replicates, spread / reported = 1 + rho (1/h - 1): that gives rho. The
-// factor by which the surface understates the model's variance at the baseline fit x0 is then
-// 1 + rho (1/h(x0) - 1): small where the fit sits on an end node (h = 31/35). That factor is the
-// equally weighted surface's, as the loop's is since af66c1c (until then it weighted each node by
-// its own standard error, for which this was an estimate). Diagnostic only: no decision of the
-// loop reads it.
+// This check estimates the same thing another way, as one number per observable: it fits the
+// baseline's surface (the same window of nodes) to each model replicate's values alone, every node
+// of a point weighted alike, and compares the spread of those fits with the variance independent
+// nodes would give, at the window's middle node, where a shared error shows most (there independent
+// nodes pass the leverage h times a node's variance, 17/35 for five nodes, while a shared error
+// passes whole). With a correlation rho between any two nodes' replicates, spread / independent =
+// 1 + rho (1/h - 1): that gives rho. The factor by which independent nodes understate the model's
+// variance at the baseline fit x0 is then 1 + rho (1/h(x0) - 1): small where the fit sits on an end
+// node (h = 31/35). Set beside it is the factor the surface counts at x0 (its variance over
+// independent nodes'). The two agree when the correlation is alike between any two nodes; where it
+// falls off with the nodes' distance, as the first crossing's does, this check's one rho is a mean
+// over the window that weights the near pairs less than the surface does. Diagnostic only: no
+// decision of the loop reads it.
 #pragma once
 
 #include "calibrate/fit.hpp"
@@ -29,7 +32,8 @@ struct SurfaceNoiseGroup {
   std::string name;           // an observable, or "all"
   int points = 0;             // fitted points with a value in every replicate at every node of the window
   double correlation = NAN;   // rho: the replicates' correlation between nodes (independent nodes: about 0)
-  double understated = NAN;   // the true model variance at the baseline over what the surface reports
+  double understated = NAN;   // the true model variance at the baseline over what independent nodes give
+  double counted = NAN;       // the surface's variance at the baseline over what independent nodes give
 };
 
 struct SurfaceNoiseCheck {
@@ -41,7 +45,7 @@ struct SurfaceNoiseCheck {
 
 SurfaceNoiseCheck surface_noise_check(const DataFile& data, const BaselineFit& base);
 
-// One log line: the estimates and, where the surface understates by more than 1.5 x, what that means.
+// One log line: the estimates and, where they exceed what the surface counts by more than 1.5 x, what that means.
 std::string surface_noise_text(const SurfaceNoiseCheck& c);
 
 }  // namespace gapflow

@@ -313,12 +313,14 @@ TEST(CalibrationSynthetic, ADragOfAnotherFormReadAsLinearDragIsFlaggedByTheFormC
   ASSERT_EQ(r.effects.size(), 1u) << "the premise: one effect is added\n" << r.verdict << "\n" << run.log;
   EXPECT_EQ(r.effects.front().effect, "linear_drag");
   EXPECT_TRUE(r.form_differs);
-  // The flag is reported, not in the verdict (decisions.hpp, rule 3). The verdict is the poor fit
-  // that a drag of another form leaves: chi^2 28.2 on 13 (p = 0.008) on the surface, 41.1 on fresh
-  // seeds. Until the surface counted the noise its first effect shares with its quadratic
-  // (fit.hpp, Surface::predict), it stated 24.4 (p = 0.027) for the same fit and the verdict was the
-  // law's reservation, which the result still carries.
-  EXPECT_EQ(r.verdict, "effect found, poor fit remains");
+  // The flag is reported, not in the verdict (decisions.hpp, rule 3). The verdict is the law's
+  // reservation: the surface's chi^2 at the fit is 23.9 on 13 (p = 0.033), not poor enough for "poor
+  // fit remains" (40.6 on fresh seeds). It has moved with the surface's variance: 24.4 (p = 0.027)
+  // and this verdict until the surface counted the noise its first effect shares with its quadratic
+  // (fit.hpp, Surface::predict); 28.2 (p = 0.008), "effect found, poor fit remains", until it counted
+  // the noise its nodes share (calibrate/node_correlation.hpp: this model's replicates correlate
+  // about +0.9 between neighbouring nodes).
+  EXPECT_EQ(r.verdict, "effect found; the drag's law in the speed is not established: a drag of another law may be acting");
   EXPECT_TRUE(r.law_undetermined);
   for (const FormCheck& k : r.form_checks) {
     if (k.column == "incline_deg") {
@@ -410,14 +412,18 @@ TEST(CalibrationSynthetic, WhenTwoCandidatesAreSignificantBothAreFittedAndThePla
 // beside the one tried, and one that alone leaves the fitted points within the noise is named and
 // withholds the verdict's identity; the effect tried, its size and the keep test are those of the
 // loop without them. Spinning friction here acts like drag scaled by 4.5 / (W/d): on these gaps
-// (3.5-5.5 d) a large drag tells them apart, a small one leaves either within the noise.
+// (3.5-5.5 d) a large drag tells them apart, a small one leaves either within the noise. On twin seed
+// 6: since the surface counts the noise its nodes share (calibrate/node_correlation.hpp), the small
+// drag's premise (one effect added, spinning friction within the noise) held on twin seeds 2 and 6 of
+// 1-7; on seed 3, this test's until then, spinning friction now scores first and the keep test
+// rejects it, and nothing is added.
 TEST(CalibrationSynthetic, AlternativesThatAloneFitWithinTheNoiseAreNamedAndChangeNothingElse) {
   const double small = knob("GAPFLOW_ALT_SMALL", 1.0), large = knob("GAPFLOW_ALT_LARGE", 4.0);
   for (double drag : {small, large}) {
     const std::string planted = fmt::format("linear_drag={}", drag);
     TempDir plain_dir("gapflow_calibration_synthetic_alt0"), alt_dir("gapflow_calibration_synthetic_alt1");
-    const SyntheticRun plain = calibrate_synthetic(plain_dir, {planted}, 1);
-    const SyntheticRun alt = calibrate_synthetic(alt_dir, {planted}, 1, {.alternatives = 1});
+    const SyntheticRun plain = calibrate_synthetic(plain_dir, {planted}, 1, {.twin_seed = 6});
+    const SyntheticRun alt = calibrate_synthetic(alt_dir, {planted}, 1, {.twin_seed = 6, .alternatives = 1});
     const CalibrationResult &p = plain.result, &a = alt.result;
     ASSERT_EQ(a.effects.size(), 1u) << drag << ": the premise, one effect added\n" << alt.log;
     ASSERT_EQ(p.effects.size(), a.effects.size()) << drag;
@@ -524,15 +530,16 @@ TEST(CalibrationSynthetic, TheHeldOutRouteTracesAResidualOnlyTheHeldOutPointsSho
   EXPECT_EQ(on.result.verdict.rfind("effect found", 0), 0u) << on.result.verdict;
 }
 
-// The route keeps rule 1's condition on the candidate. On null twins whose fitted points pass and
-// whose held-out points do not (of twin seeds 1-30 of this design, seeds 12 and 16; until the
-// surface weighted its nodes alike, 5 and 6 of 1-8; the closed-form
-// model's noise is mostly common to every parameter value, which the surface understates about
-// 2x: calibrate/surface_noise.hpp), the route considers the round, no candidate's score is
-// significant, and nothing is tried or added. (A null on which a candidate is significant too,
-// where the keep test would have to reject, was not found among these seeds.)
+// The route keeps rule 1's condition on the candidate. On a null twin whose fitted points pass and
+// whose held-out points do not, the route considers the round, no candidate's score is significant,
+// and nothing is tried or added. Such twins are rare now: of twin seeds 1-30 of this design, only
+// seed 16. Until the surface counted the noise its nodes share (calibrate/node_correlation.hpp; the
+// closed-form model's replicates correlate about +0.9 between neighbouring nodes, which the surface
+// had understated about 2x) seeds 12 and 16 were; until it weighted its nodes alike, 5 and 6 of 1-8.
+// (A null on which a candidate is significant too, where the keep test would have to reject, was not
+// found among these seeds.)
 TEST(CalibrationSynthetic, TheHeldOutRouteTriesNothingOnANullTwinWithoutASignificantCandidate) {
-  for (std::uint64_t seed : {12u, 16u}) {
+  for (std::uint64_t seed : {16u}) {
     TempDir dir("gapflow_calibration_synthetic_route_null");
     const SyntheticRun run = calibrate_synthetic(
         dir, {}, 1, {.twin_seed = seed, .model_seed = 100 + seed, .shallow_held_out = true, .held_out_route = true});
