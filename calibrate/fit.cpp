@@ -129,9 +129,11 @@ std::vector<double> scaled(const Surface& s, const ParameterSet& p) {
 // 5 nodes give one point too few to judge its own curve): the residual sum of squares over what the
 // nodes' noise alone would give it, tr((I - X H) Sigma) / (n - p) per degree of freedom (a shared
 // error that the quadratic absorbs leaves no residual); a point whose nodes have no noise adds none.
+// That per-degree noise goes to `residual_noise` (0 where there is none), for the widening.
 // Returns H, padded like the coefficients.
 Eigen::MatrixXd regress_point(Surface& s, const std::vector<std::vector<double>>& xs, const std::vector<double>& y,
-                              const Eigen::MatrixXd& node_cov, double& lack_sum, double& lack_dof) {
+                              const Eigen::MatrixXd& node_cov, double& lack_sum, double& lack_dof,
+                              double& residual_noise) {
   const auto n = static_cast<Eigen::Index>(y.size());
   const auto p_quad = static_cast<Eigen::Index>(basis(xs.front(), true).size());
   const bool quadratic = n > p_quad;  // a quadratic needs more nodes than coefficients
@@ -146,9 +148,11 @@ Eigen::MatrixXd regress_point(Surface& s, const std::vector<std::vector<double>>
   const Eigen::MatrixXd H = (X.transpose() * X).ldlt().solve(X.transpose());
   Eigen::VectorXd coef = H * values;
   Eigen::MatrixXd cov = H * node_cov * H.transpose();
-  const double residual_noise = ((Eigen::MatrixXd::Identity(n, n) - X * H) * node_cov).trace();
-  if (n > p && residual_noise > 0) {
-    lack_sum += (X * coef - values).squaredNorm() / (residual_noise / static_cast<double>(n - p));
+  residual_noise = 0;
+  const double left = ((Eigen::MatrixXd::Identity(n, n) - X * H) * node_cov).trace();
+  if (n > p && left > 1e-9 * node_cov.trace()) {  // not rounding's: nodes sharing all their error leave ~0
+    residual_noise = left / static_cast<double>(n - p);
+    lack_sum += (X * coef - values).squaredNorm() / residual_noise;
     lack_dof += static_cast<double>(n - p);
   }
   Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(p_quad, n);
@@ -205,7 +209,9 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
     s.valid.push_back(!xs.empty() && xs.size() * 2 >= nodes.size());
     const Eigen::MatrixXd cov = used.empty() ? Eigen::MatrixXd::Identity(1, 1) : node_covariance(correlation.at(i), used, se);
     if (xs.empty()) xs.push_back(scaled(s, nodes.front())), y.push_back(0), se.push_back(1);
-    const Eigen::MatrixXd weights = regress_point(s, xs, y, cov, lack_sum, lack_dof);
+    double residual_noise = 0;
+    const Eigen::MatrixXd weights = regress_point(s, xs, y, cov, lack_sum, lack_dof, residual_noise);
+    s.misfit_variance.push_back(residual_noise);  // per node; scaled by the pooled lack of fit below
     Eigen::MatrixXd per_node = Eigen::MatrixXd::Zero(weights.rows(), static_cast<Eigen::Index>(nodes.size()));
     std::vector<double> variance(nodes.size(), 0.0);
     for (std::size_t u = 0; u < used.size(); ++u) {
@@ -215,23 +221,33 @@ Surface build_surface(const DataFile& data, const std::vector<ParameterSet>& nod
     s.node_weights.push_back(std::move(per_node));
     s.node_variance.push_back(std::move(variance));
   }
-  // Where the quadratic does not follow the nodes within their noise, widen every
-  // point's uncertainty by the pooled lack of fit.
-  // Logged (fit_baseline): in four of blind pass 15's twins it was 0.82-0.95, so no widening, at 6 and at 12
-  // model replicates alike. Pooled over observables it is pulled below 1 by the time to the first
-  // crossing, whose nodes share their seeds' error (lack of fit 0.48 at 6; calibrate/surface_noise.hpp),
-  // while J_mid's alone is about 1.16 (calibrate/surface_noise_check.py).
+  // Where the quadratic does not follow the nodes within their noise, the misfit is added as an
+  // error of each node's own: at every point, the residual noise per degree of freedom times the
+  // pooled lack of fit's excess over 1, through the weights (H H^T). With independent nodes of equal
+  // variance that is the same as scaling the covariance by the lack of fit, as the surface did until
+  // the nodes' shared error was counted; with a shared error it is not: the residuals do not see the
+  // shared part, and scaling it too would take a misfit as large as the shared noise (at the test
+  // model's correlation +0.9 between neighbours, ten times the residual noise).
+  // Logged (fit_baseline): in four of blind pass 15's twins it was 0.82-0.95, so no widening, at 6
+  // and at 12 model replicates alike, pooled over observables and pulled below 1 by the time to the
+  // first crossing, whose nodes share their seeds' error (0.48 at 6), while J_mid's alone was about
+  // 1.16 (calibrate/surface_noise_check.py); read against what the correlated noise leaves, the
+  // first crossing no longer pulls it down.
   if (lack_dof > 0) s.lack_of_fit = lack_sum / lack_dof;
-  for (Eigen::MatrixXd& c : s.cov) c *= std::max(1.0, s.lack_of_fit.value_or(1.0));
+  const double excess = std::max(0.0, s.lack_of_fit.value_or(1.0) - 1);
+  for (std::size_t i = 0; i < s.cov.size(); ++i) {
+    s.misfit_variance[i] *= excess;
+    s.cov[i] += s.misfit_variance[i] * s.node_weights[i] * s.node_weights[i].transpose();
+  }
   return s;
 }
 
 // The pooled lack of fit as the log gives it: a variance ratio (reduced chi^2 of the nodes about the
-// quadratic); the coefficients' covariance is scaled by it where it exceeds 1, their se by its root.
+// quadratic); where it exceeds 1 the misfit is added to the coefficients' covariance (build_surface).
 std::string lack_of_fit_text(const Surface& s) {
   if (!s.lack_of_fit) return "";
   return fmt::format("; lack of fit (reduced chi2 of the nodes about it) {:.2f}{}", *s.lack_of_fit,
-                     *s.lack_of_fit > 1 ? ", its variance widened by that" : "");
+                     *s.lack_of_fit > 1 ? ", the excess added to its variance as the nodes' own error" : "");
 }
 
 struct Var {
@@ -260,7 +276,11 @@ std::vector<std::vector<std::size_t>> shared_nodes(const Surface& s) {
 
 // The covariance of the quadratic's value (its node weights at x: `at_x`) with an effect's shift at
 // point i, whose variance is `shift_variance`: the paired nodes' weights times the covariance of
-// one node's mean with the shift (`paired`, EffectTerm::response). Held within the Cauchy-Schwarz
+// one node's mean with the shift (`paired`, EffectTerm::response). The other nodes' correlation
+// with the paired ones (node_correlation.hpp) adds nothing where it comes from an error the seeds
+// give every node alike: the moved run carries it as its partner does, and the shift cancels it.
+// Where it falls off with the parameter (the first crossing), the effect's small move keeps most of
+// it; what is left is not counted. Held within the Cauchy-Schwarz
 // bound of the two parts it links (the shared nodes' share of the quadratic and the shift), so that
 // the se's estimates, each from a few runs, can never make the sum's variance negative.
 double shared_covariance(const Surface& s, std::size_t i, const Eigen::RowVectorXd& at_x, const std::vector<std::size_t>& shared,
@@ -308,7 +328,13 @@ Prediction Surface::predict_fit(const ParameterSet& params) const {
   return p;
 }
 
+double Surface::misfit_part(const ParameterSet& params, std::size_t i) const {
+  if (i >= node_weights.size() || i >= misfit_variance.size()) return 0;
+  return misfit_variance[i] * (basis(scaled(*this, params), true).transpose() * node_weights[i]).squaredNorm();
+}
+
 double Surface::independent_nodes_variance(const ParameterSet& params, std::size_t i) const {
+  if (i >= node_weights.size()) return NAN;  // a surface made by hand
   const Eigen::RowVectorXd at_x = basis(scaled(*this, params), true).transpose() * node_weights[i];
   double v = 0;
   for (std::size_t n = 0; n < node_variance[i].size(); ++n) v += at_x(static_cast<Eigen::Index>(n)) * at_x(static_cast<Eigen::Index>(n)) * node_variance[i][n];

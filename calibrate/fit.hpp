@@ -79,12 +79,13 @@ struct Surface {
   std::vector<Eigen::MatrixXd> cov;   // per point: covariance of coef
   std::vector<bool> valid;            // every node gave a value at this point
   std::vector<EffectTerm> effects;    // added (fitted) effects
-  std::optional<double> lack_of_fit;  // pooled reduced chi^2 of the nodes about the quadratic (> 1: cov widened by it);
-                                      // none where no point had more nodes than coefficients
+  std::optional<double> lack_of_fit;  // pooled reduced chi^2 of the nodes about the quadratic (> 1: its excess added to
+                                      // cov as a misfit); none where no point had more nodes than coefficients
   std::vector<ParameterSet> nodes;    // the nodes it goes through (empty for a surface made by hand)
   std::vector<Eigen::MatrixXd> node_weights;     // per point: coef = node_weights * the nodes' fit values (a zero
                                                  // column where a node has none)
   std::vector<std::vector<double>> node_variance;  // per point, per node: its fit value's se^2 (0 where none)
+  std::vector<double> misfit_variance;  // per point: the lack of fit's excess as each node's own error (fit-scale^2; in cov)
 
   // Value, fit-scale value and its se at each point; params hold free keys and effect keys.
   // The se counts the noise the quadratic and an effect's term share: a term whose shifts are
@@ -101,6 +102,8 @@ struct Surface {
   // its weight squared), without the lack-of-fit widening: what the surface stated until the
   // replicates' correlation between nodes was counted (calibrate/surface_noise.hpp compares the two).
   double independent_nodes_variance(const ParameterSet& params, std::size_t i) const;
+  // The lack of fit's share of the quadratic's variance at point i (0 where it is within the noise).
+  double misfit_part(const ParameterSet& params, std::size_t i) const;
   // d(fit)/d(key) of a free parameter at `params`, per point.
   std::vector<double> derivative(const ParameterSet& params, std::size_t k) const;
 };

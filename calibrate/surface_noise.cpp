@@ -43,8 +43,8 @@ BaselineFit replicate_nodes(const BaselineFit& window, std::size_t points, std::
 }
 
 // The variance the surface reports at point i without its lack-of-fit widening (fit.cpp, build_surface).
-double unwidened_variance(const Surface& s, const Prediction& p, std::size_t i) {
-  return p.se_fit[i] * p.se_fit[i] / std::max(1.0, s.lack_of_fit.value_or(1.0));
+double unwidened_variance(const Surface& s, const Prediction& p, const ParameterSet& at, std::size_t i) {
+  return p.se_fit[i] * p.se_fit[i] - s.misfit_part(at, i);
 }
 
 struct Sums {
@@ -104,7 +104,7 @@ SurfaceNoiseCheck surface_noise_check(const DataFile& data, const BaselineFit& b
     h_fit = independent_fit / pooled;
     for (Sums* s : {&all, &by_observable[to_string(data.points[i].observable)]}) {
       ++s->points, s->spread += spread, s->independent += independent;
-      s->counted += unwidened_variance(mean_surface, at_fit, i), s->independent_fit += independent_fit;
+      s->counted += unwidened_variance(mean_surface, at_fit, base.params, i), s->independent_fit += independent_fit;
     }
   }
   if (all.points == 0) return c.problem = "no fitted point has every model replicate at every node", c;

@@ -15,9 +15,9 @@
 // variance at the baseline fit x0 is then 1 + rho (1/h(x0) - 1): small where the fit sits on an end
 // node (h = 31/35). Set beside it is the factor the surface counts at x0 (its variance over
 // independent nodes'). The two agree when the correlation is alike between any two nodes; where it
-// falls off with the nodes' distance, as the first crossing's does, this check's one rho is a mean
-// over the window that weights the near pairs less than the surface does. Diagnostic only: no
-// decision of the loop reads it.
+// falls off with the nodes' distance, as the first crossing's does, this check's one rho is the
+// pairs' correlations weighted as the middle node's prediction weighs them, and its factor at x0
+// differs from the surface's where x0 is elsewhere. Diagnostic only: no decision of the loop reads it.
 #pragma once
 
 #include "calibrate/fit.hpp"

@@ -260,8 +260,9 @@ std::vector<double> raw_model_se(const DataFile& design, const TwinDef& def, con
 // The model's part of the noise as the loop sees it. The loop does not compare the data with a
 // raw grid node: its fit, its residual and its score test all use the response surface through
 // the five nodes around the fit (fit.cpp, surface_around), a least-squares quadratic whose
-// prediction is less noisy than any one node (at the middle of five nodes of equal noise, by
-// sqrt(17/35)), and whose noise is what it whitens with. Before, the oracle took the raw node's
+// prediction is less noisy than any one node (at the middle of five independent nodes of equal noise,
+// by sqrt(17/35); less so where they share their seeds' error, calibrate/node_correlation.hpp), and
+// whose noise is what it whitens with. Before, the oracle took the raw node's
 // noise and so understated what the loop sees (passes 8-14: the loop's baseline chi^2 beyond its
 // degrees of freedom ran 1.29 x the oracle's lambda, median over 114 twins;
 // results/calibration-blind-passes.md, "The oracle's noise"). The same surface is built here
