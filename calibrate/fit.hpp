@@ -77,7 +77,7 @@ struct Surface {
   std::vector<double> lo, hi;         // the nodes' range of each free parameter (the surface holds there)
   std::vector<Eigen::VectorXd> coef;  // per point: 1, x'_k, x'_k x'_l (k <= l)
   std::vector<Eigen::MatrixXd> cov;   // per point: covariance of coef
-  std::vector<bool> valid;            // every node gave a value at this point
+  std::vector<bool> valid;            // at least half the nodes gave a value at this point (build_surface)
   std::vector<EffectTerm> effects;    // added (fitted) effects
   std::optional<double> lack_of_fit;  // pooled reduced chi^2 of the nodes about the quadratic (> 1: its excess added to
                                       // cov as a misfit); none where no point had more nodes than coefficients
