@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Pass 25's scoring, once all 28 calibrations have ended (results/calibration-blind-pass25/PREREGISTRATION.md):
+# the copy and the pass's counts; the surface against direct simulation on fresh seeds (expectations 5-7);
+# and the control: the same 28 twins calibrated on the pass's store by pass 24's binary (the loop before
+# the surface's noise was made honest, 21de738), so that what the change did is read on fresh draws,
+# twin by twin (expectations 8-9). The control simulates what pass 24's loop asks for beyond the pass's
+# runs (about an hour on 2 cores, from replay-shared-cov's 57 min).
+#
+#   studies/score_pass25.sh LAUNCH_TIMEV [ONLY]
+#
+# LAUNCH_TIMEV: the /usr/bin/time record of the launch that finished the pass (/work/pass25.timevN).
+# ONLY: the twins this machine's store holds runs of, when the pass was carried between machines (the
+# control replays only those; a calibration replayed without its runs would simulate them again).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+[[ $# -ge 1 && -f $1 ]] || { echo "usage: studies/score_pass25.sh LAUNCH_TIMEV [ONLY]" >&2; exit 2; }
+timev=$1
+P=results/calibration-blind-pass25
+for b in /work/bin-p25/gapflow /work/bin-p24/gapflow; do
+  [[ -x $b ]] || { echo "error: $b missing (see $P/carry/README.md)" >&2; exit 2; }
+done
+(( $(ls /work/pass25/*/summary.json | wc -l) == 28 )) || { echo "error: pass 25 has not ended" >&2; exit 2; }
+studies/blind_pass_copy.sh /work/pass25 $P "$timev"
+/usr/bin/python3 calibrate/visibility_ceiling.py --gates --by-case $P > $P/gates.txt
+/usr/bin/python3 calibrate/replay_compare.py $P $P > $P/size_errors.txt
+/usr/bin/python3 calibrate/pass_counts.py $P > $P/pass_counts.txt
+/usr/bin/python3 calibrate/interval_coverage.py $P > $P/interval_coverage.md
+/usr/bin/python3 calibrate/fresh_points.py $P > $P/fresh_points.txt
+/usr/bin/python3 calibrate/surface_optimism.py $P > $P/surface_optimism.txt
+/usr/bin/python3 calibrate/node_correlation_check.py /work/pass25 > $P/node_correlation.txt
+# Pooled, for the record only: the loop changed at this pass, so its own count is the claim.
+passes=$(printf 'results/calibration-blind-pass%s ' 10 12 13 14 15 16 17 18 19 20 21 23 24 25)
+/usr/bin/python3 calibrate/visibility_ceiling.py --by-case $passes > $P/pooled_passes_10_12-21_23-25.txt
+# The control: pass 24's loop on the same twins and store.
+if [[ $# -ge 2 ]]; then export ONLY=$2; fi
+GAPFLOW=/work/bin-p24/gapflow studies/calibration_replay.sh /work/pass25 replay-loop-p24 2
+unset ONLY
+C=$P/replay-loop-p24
+mkdir -p $C && (cd /work/pass25/replay-loop-p24 && tar cf - --exclude='runs.sqlite*' .) | (cd $C && tar xf -)
+/usr/bin/python3 calibrate/alternatives_replay_compare.py $C $P > $C/compare.txt || true   # the control as BEFORE
+/usr/bin/python3 calibrate/interval_coverage.py $C > $C/interval_coverage.md
+/usr/bin/python3 calibrate/fresh_points.py $C > $C/fresh_points.txt
+/usr/bin/python3 calibrate/surface_optimism.py $C > $C/surface_optimism.txt
+echo scored
