@@ -1,0 +1,108 @@
+#!/usr/bin/python3
+"""Two checks of the model's noise at a blind pass's baseline grid, per observable, from its run store (a
+diagnostic of why the response surface at the baseline disagrees with direct simulation on fresh seeds by more
+than its stated se; results/calibration-blind-pass24/replay-node-variance/README.md):
+
+    /usr/bin/python3 calibrate/grid_noise_check.py PASS_DIR
+
+1. Lack of fit: the equally weighted quadratic through every window of 5 consecutive grid nodes (as the loop's
+   surface, calibrate/fit.cpp), its residual sum of squares over what the nodes' own noise leaves about it,
+   tr((I - X H) diag(se^2)), pooled over the windows, points and twins (2 degrees of freedom a window). About 1
+   where the quadratic follows the nodes within their noise; below 1 where the nodes share error (the first
+   crossing's: calibrate/node_correlation_check.py), above where the response curves beyond a quadratic.
+2. Fresh against grid runs: the per-run variance of each design point's runs at a parameter value off the grid
+   (the fits' re-scores on fresh seeds, 6 runs and more) over the variance of the same point's grid runs
+   (every node's runs about their node's mean, pooled); mean and median over those re-scores (an F ratio:
+   mean about 1 and median below it when the noise is alike).
+Observables on the loop's fit scales: J_mid, the first crossing's time and the crossings' spread log, their
+mean position (the exit offset, mm) linear. Twins with one free parameter only.
+"""
+import collections
+import math
+import sqlite3
+import statistics
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+OBSERVABLES = ("j_mid", "front_arrival", "exit_offset", "exit_spread")
+
+
+def runs(db, study, key):
+    """[(parameter value, point, replicate, {observable: fit-scale value})] of one twin's one-key series."""
+    q = """select r.series, r.point, r.replicate, r.j_mid,
+                  (select min(t_s) from crossings c where c.job_key = r.job_key),
+                  (select avg(x_m) from crossings c where c.job_key = r.job_key),
+                  (select count(*) from crossings c where c.job_key = r.job_key),
+                  (select avg(x_m * x_m) from crossings c where c.job_key = r.job_key)
+           from runs r where r.study = ? and r.series like ? and r.series not like '%,%'"""
+    out = []
+    for series, point, rep, j_mid, first, mean_x, n, mean_x2 in db.execute(q, (f"calibrate:{study}", f"{key}=%")):
+        v = {}
+        if j_mid and j_mid > 0: v["j_mid"] = math.log(j_mid)
+        if first and first > 0: v["front_arrival"] = math.log(first)
+        if n and n >= 1: v["exit_offset"] = mean_x * 1e3
+        if n and n >= 2:
+            var = (mean_x2 - mean_x * mean_x) * n / (n - 1)
+            if var > 0: v["exit_spread"] = math.log(math.sqrt(var) * 1e3)
+        out.append((float(series.split("=", 1)[1]), point, rep, v))
+    return out
+
+
+def lack_of_fit(grid, lack):
+    """Adds each 5-node window's residual sum over its noise, and 2 dof, to lack[obs]."""
+    for (obs, point), nodes in grid.items():
+        levels = sorted(k for k, reps in nodes.items() if len(reps) >= 3)
+        for first in range(len(levels) - 4):
+            window = levels[first:first + 5]
+            y = np.array([np.mean(nodes[k]) for k in window])
+            var = np.array([np.var(nodes[k], ddof=1) / len(nodes[k]) for k in window])
+            x = np.array(window, float)
+            X = np.vstack([np.ones(5), x, x * x]).T
+            H = np.linalg.solve(X.T @ X, X.T)
+            residual = X @ (H @ y) - y
+            noise = np.trace((np.eye(5) - X @ H) @ np.diag(var)) / 2
+            if noise > 0:
+                lack[obs][0] += residual @ residual / noise
+                lack[obs][1] += 2
+
+
+def main(pass_dir):
+    pass_dir = Path(pass_dir)
+    db = sqlite3.connect(f"file:{pass_dir / 'runs.sqlite'}?mode=ro", uri=True)
+    lack = collections.defaultdict(lambda: [0.0, 0])
+    ratios = collections.defaultdict(list)
+    for twin in sorted((pass_dir / "twins").glob("*.toml")):
+        free = tomllib.loads(twin.read_text())["free"]
+        if len(free) != 1: continue
+        key, lo, step = free[0]["key"], free[0]["lo"], free[0]["step"]
+        grid = collections.defaultdict(lambda: collections.defaultdict(list))   # (obs, point) -> level -> values
+        fresh = collections.defaultdict(list)                                    # (obs, point, value) -> values
+        for value, point, _, v in runs(db, twin.stem, key):
+            level = (value - lo) / step
+            on_grid = abs(level - round(level)) < 1e-6
+            for obs, x in v.items():
+                if on_grid: grid[(obs, point)][round(level)].append(x)
+                else: fresh[(obs, point, value)].append(x)
+        lack_of_fit(grid, lack)
+        for (obs, point, _), xs in fresh.items():
+            nodes = [reps for reps in grid[(obs, point)].values() if len(reps) >= 2]
+            within = sum(np.var(r, ddof=1) * (len(r) - 1) for r in nodes)
+            dof = sum(len(r) - 1 for r in nodes)
+            if len(xs) >= 6 and dof >= 20 and within > 0:
+                ratios[obs].append(np.var(xs, ddof=1) / (within / dof))
+    print(f"{pass_dir.name}: per observable, (1) the 5-node quadratic's lack of fit over the grid (dof), "
+          "(2) fresh re-scores' per-run variance over the grid's: mean, median (re-scores)")
+    for obs in OBSERVABLES:
+        s, dof = lack[obs]
+        r = ratios[obs]
+        print(f"{obs:<15}{s / dof if dof else float('nan'):7.3f} ({dof:4d})"
+              f"{statistics.mean(r) if r else float('nan'):9.3f}{statistics.median(r) if r else float('nan'):7.3f} ({len(r)})")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    main(sys.argv[1])
