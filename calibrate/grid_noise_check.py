@@ -104,5 +104,10 @@ def main(pass_dir):
 
 if __name__ == "__main__":
     if len(sys.argv) != 2:
-        sys.exit(__doc__)
-    main(sys.argv[1])
+        print(__doc__, file=sys.stderr)
+        sys.exit(2)
+    folder = Path(sys.argv[1])
+    if not (folder / "runs.sqlite").is_file() or not (folder / "twins").is_dir():
+        print(f"error: {folder} is not a blind pass with its store (runs.sqlite and twins/ expected)", file=sys.stderr)
+        sys.exit(2)
+    main(folder)

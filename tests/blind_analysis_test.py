@@ -981,5 +981,59 @@ class AlternativesReplayCompare(unittest.TestCase):
             self.assertNotIn("rule 5", (folder / "report.md").read_text())
             self.assertIn("CPU the calibrations' processes used", (folder / "report.md").read_text())
 
+
+class GridRuns(unittest.TestCase):
+    """calibrate/node_correlation_check.py and grid_noise_check.py on a fake pass store with known answers."""
+
+    def make_pass(self, root):
+        """One twin, one design point, 5 friction nodes (0.1-0.5 in 0.1) of 5 replicates, and a re-score at 0.25
+        on 6 fresh runs. Replicate r at node k: J_mid = exp(1 + 0.1 r + 0.01 k) (the same error at every node:
+        correlation +1, and the node means lie on a line: lack of fit 0); the crossings at x = (r - 2)(-1)^k mm
+        (the error flips sign from node to node: -1 one step apart, +1 two apart), all at t = 2 s (no spread:
+        no first-crossing row). The re-score's J_mid: exp(1 + 0.2 r) for r = 0..5."""
+        (root / "twins").mkdir(parents=True)
+        (root / "twins" / "t1.toml").write_text(
+            '[[free]]\nkey = "particles.friction_particle"\nlo = 0.1\nhi = 0.5\nstep = 0.1\n')
+        db = sqlite3.connect(root / "runs.sqlite")
+        db.execute("create table runs (job_key text, study text, series text, point integer, replicate integer, j_mid real)")
+        db.execute("create table crossings (job_key text, id integer, t_s real, x_m real)")
+        def add(key, series, rep, j, xs):
+            db.execute("insert into runs values (?, 'calibrate:t1', ?, 0, ?, ?)", (key, series, rep, j))
+            for n, x in enumerate(xs):
+                db.execute("insert into crossings values (?, ?, 2.0, ?)", (key, n, x))
+        for k in range(5):
+            for r in range(5):
+                x = (r - 2) * (-1) ** k * 1e-3
+                add(f"g{k}{r}", f"particles.friction_particle={0.1 + 0.1 * k}", r, math.exp(1 + 0.1 * r + 0.01 * k), [x, x])
+        for r in range(6):
+            add(f"f{r}", "particles.friction_particle=0.25", r, math.exp(1 + 0.2 * r), [])
+        # A signature run (two keys): not a grid run.
+        add("s0", "particles.friction_particle=0.1, particles.drag_per_s=1", 0, 99.0, [0.0])
+        db.commit()
+        db.close()
+
+    def test_the_correlation_by_distance_and_the_grids_lack_of_fit(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            root = Path(tmp, "pass")
+            self.make_pass(root)
+            code, out, err = run("node_correlation_check.py", root)
+            self.assertEqual(code, 0, err)
+            rows = {line.split()[0]: line for line in out.splitlines()[2:]}
+            self.assertEqual(rows["j_mid"].split()[1::2], ["+1.000", "+1.000", "+1.000", "+1.000"])
+            self.assertEqual(rows["exit_offset"].split()[1::2], ["-1.000", "+1.000", "-1.000", "+1.000"])
+            self.assertEqual(rows["j_mid"].split()[2], "(20)")  # 5 replicate pairs in each of 4 node pairs 1 apart
+            self.assertEqual(rows["front_arrival"].split(), ["front_arrival"])  # no spread
+            code, out, err = run("grid_noise_check.py", root)
+            self.assertEqual(code, 0, err)
+            j_mid = next(line for line in out.splitlines() if line.startswith("j_mid"))
+            # One window, its means on a line; then the re-score's per-run variance over the grid's pooled
+            # within-node one (5 replicates at 5 nodes), its mean and median over the one re-score.
+            ratio = statistics.variance([0.2 * r for r in range(6)]) / statistics.variance([0.1 * r for r in range(5)])
+            self.assertRegex(j_mid, rf"^j_mid\s+0\.000 \(\s*2\)\s+{ratio:.3f}\s+{ratio:.3f} \(1\)$")
+        for script in ("node_correlation_check.py", "grid_noise_check.py"):
+            self.assertEqual(run(script, "/nonexistent")[0], 2)
+            self.assertEqual(run(script)[0], 2)
+
+
 if __name__ == "__main__":
     unittest.main()
