@@ -14,6 +14,11 @@ than its stated se; results/calibration-blind-pass24/replay-node-variance/README
    (the fits' re-scores on fresh seeds, 6 runs and more) over the variance of the same point's grid runs
    (every node's runs about their node's mean, pooled); mean and median over those re-scores (an F ratio:
    mean about 1 and median below it when the noise is alike).
+3. An effect's shifts (J_mid, the first crossing, the exit offset): where an effect was moved at three or more grid nodes on the grid's seeds (a signature
+   or a response size, series "key=value, effect=size"), its paired differences from the grid's runs (same
+   point, replicate and seed), their variance pooled over the nodes over the pooled within-node variance, summed
+   over the sizes and points. The loop's shift se comes from the differences pooled over the nodes
+   (calibrate/effect_responses.cpp); above 1, the shift's change from node to node enters it as noise.
 Observables on the loop's fit scales: J_mid, the first crossing's time and the crossings' spread log, their
 mean position (the exit offset, mm) linear. Twins with one free parameter only.
 """
@@ -51,6 +56,45 @@ def runs(db, study, key):
     return out
 
 
+def shift_spread(db, study, key, lo, step, spread):
+    """Adds, per observable, the shifts' variance pooled over the nodes and the within-node one to spread[obs]."""
+    q = """select r.series, r.point, r.replicate, r.base_seed, r.j_mid,
+                  (select min(t_s) from crossings c where c.job_key = r.job_key),
+                  (select avg(x_m) from crossings c where c.job_key = r.job_key)
+           from runs r where r.study = ? and r.series like ?"""
+    runs_at = collections.defaultdict(dict)      # (level, effect, point, seed) -> replicate -> {obs: value}
+    moved = collections.defaultdict(set)         # (effect, seed) -> grid levels moved
+    for series, point, rep, seed, j_mid, first, mean_x in db.execute(q, (f"calibrate:{study}", f"{key}=%")):
+        parts = [p.split("=", 1) for p in series.split(", ")]
+        if parts[0][0] != key or len(parts) > 2: continue
+        level = (float(parts[0][1]) - lo) / step
+        if abs(level - round(level)) > 1e-6: continue
+        effect = (parts[1][0], round(float(parts[1][1]), 9)) if len(parts) == 2 else None
+        v = {}
+        if j_mid and j_mid > 0: v["j_mid"] = math.log(j_mid)
+        if first and first > 0: v["front_arrival"] = math.log(first)
+        if mean_x is not None: v["exit_offset"] = mean_x * 1e3
+        runs_at[(round(level), effect, point, seed)][rep] = v
+        if effect: moved[(effect, seed)].add(round(level))
+    for (effect, seed), levels in moved.items():
+        if len(levels) < 3: continue
+        points = {k[2] for k in runs_at if k[1] == effect and k[3] == seed}
+        for obs in OBSERVABLES:
+            for point in points:
+                by_node = []
+                for level in sorted(levels):
+                    base = runs_at.get((level, None, point, seed), {})
+                    d = [v[obs] - base[rep][obs] for rep, v in runs_at.get((level, effect, point, seed), {}).items()
+                         if obs in v and obs in base.get(rep, {})]
+                    if len(d) >= 2: by_node.append(d)
+                if len(by_node) < 3: continue
+                within = sum(np.var(d, ddof=1) * (len(d) - 1) for d in by_node) / sum(len(d) - 1 for d in by_node)
+                if within > 0:
+                    spread[obs][0] += np.var([x for d in by_node for x in d], ddof=1)
+                    spread[obs][1] += within
+                    spread[obs][2] += 1
+
+
 def lack_of_fit(grid, lack):
     """Adds each 5-node window's residual sum over its noise, and 2 dof, to lack[obs]."""
     for (obs, point), nodes in grid.items():
@@ -74,6 +118,7 @@ def main(pass_dir):
     db = sqlite3.connect(f"file:{pass_dir / 'runs.sqlite'}?mode=ro", uri=True)
     lack = collections.defaultdict(lambda: [0.0, 0])
     ratios = collections.defaultdict(list)
+    spread = collections.defaultdict(lambda: [0.0, 0.0, 0])
     for twin in sorted((pass_dir / "twins").glob("*.toml")):
         free = tomllib.loads(twin.read_text())["free"]
         if len(free) != 1: continue
@@ -87,6 +132,7 @@ def main(pass_dir):
                 if on_grid: grid[(obs, point)][round(level)].append(x)
                 else: fresh[(obs, point, value)].append(x)
         lack_of_fit(grid, lack)
+        shift_spread(db, twin.stem, key, lo, step, spread)
         for (obs, point, _), xs in fresh.items():
             nodes = [reps for reps in grid[(obs, point)].values() if len(reps) >= 2]
             within = sum(np.var(r, ddof=1) * (len(r) - 1) for r in nodes)
@@ -94,12 +140,15 @@ def main(pass_dir):
             if len(xs) >= 6 and dof >= 20 and within > 0:
                 ratios[obs].append(np.var(xs, ddof=1) / (within / dof))
     print(f"{pass_dir.name}: per observable, (1) the 5-node quadratic's lack of fit over the grid (dof), "
-          "(2) fresh re-scores' per-run variance over the grid's: mean, median (re-scores)")
+          "(2) fresh re-scores' per-run variance over the grid's: mean, median (re-scores), (3) an effect's shifts: "
+          "variance pooled over the nodes over the within-node one (sizes x points)")
     for obs in OBSERVABLES:
         s, dof = lack[obs]
         r = ratios[obs]
+        total, within, n = spread[obs]
         print(f"{obs:<15}{s / dof if dof else float('nan'):7.3f} ({dof:4d})"
-              f"{statistics.mean(r) if r else float('nan'):9.3f}{statistics.median(r) if r else float('nan'):7.3f} ({len(r)})")
+              f"{statistics.mean(r) if r else float('nan'):9.3f}{statistics.median(r) if r else float('nan'):7.3f} ({len(r)})"
+              f"{total / within if within else float('nan'):9.3f} ({n})")
 
 
 if __name__ == "__main__":

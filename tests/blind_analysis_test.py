@@ -995,10 +995,11 @@ class GridRuns(unittest.TestCase):
         (root / "twins" / "t1.toml").write_text(
             '[[free]]\nkey = "particles.friction_particle"\nlo = 0.1\nhi = 0.5\nstep = 0.1\n')
         db = sqlite3.connect(root / "runs.sqlite")
-        db.execute("create table runs (job_key text, study text, series text, point integer, replicate integer, j_mid real)")
+        db.execute("create table runs (job_key text, study text, series text, point integer, replicate integer, "
+                   "base_seed integer, j_mid real)")
         db.execute("create table crossings (job_key text, id integer, t_s real, x_m real)")
         def add(key, series, rep, j, xs):
-            db.execute("insert into runs values (?, 'calibrate:t1', ?, 0, ?, ?)", (key, series, rep, j))
+            db.execute("insert into runs values (?, 'calibrate:t1', ?, 0, ?, 7, ?)", (key, series, rep, j))
             for n, x in enumerate(xs):
                 db.execute("insert into crossings values (?, ?, 2.0, ?)", (key, n, x))
         for k in range(5):
@@ -1007,8 +1008,13 @@ class GridRuns(unittest.TestCase):
                 add(f"g{k}{r}", f"particles.friction_particle={0.1 + 0.1 * k}", r, math.exp(1 + 0.1 * r + 0.01 * k), [x, x])
         for r in range(6):
             add(f"f{r}", "particles.friction_particle=0.25", r, math.exp(1 + 0.2 * r), [])
-        # A signature run (two keys): not a grid run.
-        add("s0", "particles.friction_particle=0.1, particles.drag_per_s=1", 0, 99.0, [0.0])
+        # A drag moved at the first three nodes (two keys: not grid runs), its shift in ln J_mid 0.05 (r + k) at
+        # replicate r, node k: within each node a variance of 0.05^2 var(0..4), pooled over the nodes that plus
+        # the nodes' spread.
+        for k in range(3):
+            for r in range(5):
+                add(f"s{k}{r}", f"particles.friction_particle={0.1 + 0.1 * k}, particles.drag_per_s=1", r,
+                    math.exp(1 + 0.1 * r + 0.01 * k + 0.05 * (r + k)), [0.0])
         db.commit()
         db.close()
 
@@ -1029,7 +1035,9 @@ class GridRuns(unittest.TestCase):
             # One window, its means on a line; then the re-score's per-run variance over the grid's pooled
             # within-node one (5 replicates at 5 nodes), its mean and median over the one re-score.
             ratio = statistics.variance([0.2 * r for r in range(6)]) / statistics.variance([0.1 * r for r in range(5)])
-            self.assertRegex(j_mid, rf"^j_mid\s+0\.000 \(\s*2\)\s+{ratio:.3f}\s+{ratio:.3f} \(1\)$")
+            shifts = [0.05 * (r + k) for k in range(3) for r in range(5)]
+            spread = statistics.variance(shifts) / statistics.variance([0.05 * r for r in range(5)])
+            self.assertRegex(j_mid, rf"^j_mid\s+0\.000 \(\s*2\)\s+{ratio:.3f}\s+{ratio:.3f} \(1\)\s+{spread:.3f} \(1\)$")
         for script in ("node_correlation_check.py", "grid_noise_check.py"):
             self.assertEqual(run(script, "/nonexistent")[0], 2)
             self.assertEqual(run(script)[0], 2)
