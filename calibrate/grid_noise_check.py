@@ -7,11 +7,14 @@ than its stated se; results/calibration-blind-pass24/replay-node-variance/README
 
 1. Lack of fit: the equally weighted quadratic through every window of 5 consecutive grid nodes (as the loop's
    surface, calibrate/fit.cpp), its residual sum of squares over what the nodes' own noise leaves about it,
-   tr((I - X H) diag(se^2)), pooled over the windows, points and twins (2 degrees of freedom a window). About 1
-   where the quadratic follows the nodes within their noise; below 1 where the nodes share error (the first
-   crossing's: calibrate/node_correlation_check.py), above where the response curves beyond a quadratic.
-2. Fresh against grid runs: the per-run variance of each design point's runs at a parameter value off the grid
-   (the fits' re-scores on fresh seeds, 6 runs and more) over the variance of the same point's grid runs
+   tr((I - X H) diag(se^2)), pooled over the windows, points and twins (2 degrees of freedom a window). Where
+   the quadratic follows the nodes within their noise, about nu/(nu - 2) with nu the effective degrees of
+   freedom of that noise estimate (each node's se from its own few runs; about 1.12 for five nodes of 6); below
+   it where the nodes share error (the first crossing's: calibrate/node_correlation_check.py), above where the
+   response curves beyond a quadratic.
+2. Fresh against grid runs: the per-run variance of each design point's runs on another seed than the grid's, at
+   one parameter value (the fits' re-scores on fresh seeds, and the references of signatures on seeds of their
+   own; 6 runs and more) over the variance of the same point's grid runs
    (every node's runs about their node's mean, pooled); mean and median over those re-scores (an F ratio:
    mean about 1 and median below it when the noise is alike).
 3. An effect's shifts (J_mid, the first crossing, the exit offset): where an effect was moved at three or more grid nodes on the grid's seeds (a signature
@@ -36,15 +39,15 @@ OBSERVABLES = ("j_mid", "front_arrival", "exit_offset", "exit_spread")
 
 
 def runs(db, study, key):
-    """[(parameter value, point, replicate, {observable: fit-scale value})] of one twin's one-key series."""
-    q = """select r.series, r.point, r.replicate, r.j_mid,
+    """[(parameter value, point, replicate, seed, {observable: fit-scale value})] of one twin's one-key series."""
+    q = """select r.series, r.point, r.replicate, r.base_seed, r.j_mid,
                   (select min(t_s) from crossings c where c.job_key = r.job_key),
                   (select avg(x_m) from crossings c where c.job_key = r.job_key),
                   (select count(*) from crossings c where c.job_key = r.job_key),
                   (select avg(x_m * x_m) from crossings c where c.job_key = r.job_key)
            from runs r where r.study = ? and r.series like ? and r.series not like '%,%'"""
     out = []
-    for series, point, rep, j_mid, first, mean_x, n, mean_x2 in db.execute(q, (f"calibrate:{study}", f"{key}=%")):
+    for series, point, rep, seed, j_mid, first, mean_x, n, mean_x2 in db.execute(q, (f"calibrate:{study}", f"{key}=%")):
         v = {}
         if j_mid and j_mid > 0: v["j_mid"] = math.log(j_mid)
         if first and first > 0: v["front_arrival"] = math.log(first)
@@ -52,11 +55,11 @@ def runs(db, study, key):
         if n and n >= 2:
             var = (mean_x2 - mean_x * mean_x) * n / (n - 1)
             if var > 0: v["exit_spread"] = math.log(math.sqrt(var) * 1e3)
-        out.append((float(series.split("=", 1)[1]), point, rep, v))
+        out.append((float(series.split("=", 1)[1]), point, rep, seed, v))
     return out
 
 
-def shift_spread(db, study, key, lo, step, spread):
+def shift_spread(db, study, key, lo, step, grid_seed, spread):
     """Adds, per observable, the shifts' variance pooled over the nodes and the within-node one to spread[obs]."""
     q = """select r.series, r.point, r.replicate, r.base_seed, r.j_mid,
                   (select min(t_s) from crossings c where c.job_key = r.job_key),
@@ -77,7 +80,7 @@ def shift_spread(db, study, key, lo, step, spread):
         runs_at[(round(level), effect, point, seed)][rep] = v
         if effect: moved[(effect, seed)].add(round(level))
     for (effect, seed), levels in moved.items():
-        if len(levels) < 3: continue
+        if len(levels) < 3 or seed != grid_seed: continue   # paired with the grid's runs: on its seed
         points = {k[2] for k in runs_at if k[1] == effect and k[3] == seed}
         for obs in OBSERVABLES:
             for point in points:
@@ -120,19 +123,20 @@ def main(pass_dir):
     ratios = collections.defaultdict(list)
     spread = collections.defaultdict(lambda: [0.0, 0.0, 0])
     for twin in sorted((pass_dir / "twins").glob("*.toml")):
-        free = tomllib.loads(twin.read_text())["free"]
+        spec = tomllib.loads(twin.read_text())
+        free, seed = spec["free"], spec["model"]["seed"]
         if len(free) != 1: continue
         key, lo, step = free[0]["key"], free[0]["lo"], free[0]["step"]
         grid = collections.defaultdict(lambda: collections.defaultdict(list))   # (obs, point) -> level -> values
         fresh = collections.defaultdict(list)                                    # (obs, point, value) -> values
-        for value, point, _, v in runs(db, twin.stem, key):
+        for value, point, _, run_seed, v in runs(db, twin.stem, key):
             level = (value - lo) / step
-            on_grid = abs(level - round(level)) < 1e-6
+            on_grid = abs(level - round(level)) < 1e-6 and run_seed == seed   # not a re-score landing on a node
             for obs, x in v.items():
                 if on_grid: grid[(obs, point)][round(level)].append(x)
                 else: fresh[(obs, point, value)].append(x)
         lack_of_fit(grid, lack)
-        shift_spread(db, twin.stem, key, lo, step, spread)
+        shift_spread(db, twin.stem, key, lo, step, seed, spread)
         for (obs, point, _), xs in fresh.items():
             nodes = [reps for reps in grid[(obs, point)].values() if len(reps) >= 2]
             within = sum(np.var(r, ddof=1) * (len(r) - 1) for r in nodes)
@@ -146,9 +150,10 @@ def main(pass_dir):
         s, dof = lack[obs]
         r = ratios[obs]
         total, within, n = spread[obs]
-        print(f"{obs:<15}{s / dof if dof else float('nan'):7.3f} ({dof:4d})"
-              f"{statistics.mean(r) if r else float('nan'):9.3f}{statistics.median(r) if r else float('nan'):7.3f} ({len(r)})"
-              f"{total / within if within else float('nan'):9.3f} ({n})")
+        cells = [f"{s / dof:7.3f} ({dof:4d})" if dof else f"{'-':>7} ({dof:4d})",
+                 f"{statistics.mean(r):9.3f}{statistics.median(r):7.3f} ({len(r)})" if r else f"{'-':>9}{'-':>7} (0)",
+                 f"{total / within:9.3f} ({n})" if within else f"{'-':>9} (0)"]
+        print(f"{obs:<15}" + "".join(cells))
 
 
 if __name__ == "__main__":

@@ -4,8 +4,8 @@
 // seeds still govern when the parameter moves keeps part of its error from node to node. In blind
 // pass 24's store (calibrate/node_correlation_check.py; results/calibration-blind-pass24/
 // replay-node-variance/node_correlation.txt), the time to the first crossing's replicates correlate
-// +0.50 between friction nodes 0.05 apart, +0.28 at 0.10, +0.10 to +0.18 further; J_mid's and the exit
-// offset's and spread's stay within +-0.04 at every distance. A quadratic through such nodes does not average
+// +0.67 between friction nodes 0.05 apart, +0.48 at 0.15, +0.22 at 0.40; J_mid's and the exit offset's and
+// spread's stay within +-0.05 at every distance. A quadratic through such nodes does not average
 // their shared error away, and counted as independent its variance was understated: at one free
 // parameter's middle node a shared error passes whole where independent ones pass 17/35 of it
 // (calibrate/surface_noise.hpp).

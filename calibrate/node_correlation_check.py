@@ -10,8 +10,8 @@ point and node, the replicates' values of each observable (J_mid, the time to th
 the spread of the crossings' positions on a log scale, the mean position on a linear one, as the loop's
 fit scales have them) are centred at that node; their correlation between two nodes m steps apart is
 then pooled over the twins' points (the centred products summed, over the root of the summed squares).
-Only the grid's own runs count (a series of one key=value on the grid), not the effect responses' nor
-the fits' re-scores on fresh seeds.
+Only the grid's own runs count (a series of one key=value on the grid, on the data file's seed), not the
+effect responses' nor the fits' re-scores on other seeds.
 """
 import collections
 import math
@@ -23,16 +23,16 @@ from pathlib import Path
 OBSERVABLES = ("j_mid", "front_arrival", "exit_offset", "exit_spread")
 
 
-def run_values(db, study, key):
-    """{(point, node value): {replicate: {observable: fit-scale value}}} of one twin's grid runs."""
+def run_values(db, study, key, seed):
+    """{(point, node value): {replicate: {observable: fit-scale value}}} of one twin's runs on its data file's seed."""
     q = """select r.series, r.point, r.replicate, r.j_mid,
                   (select min(t_s) from crossings c where c.job_key = r.job_key),
                   (select avg(x_m) from crossings c where c.job_key = r.job_key),
                   (select count(*) from crossings c where c.job_key = r.job_key),
                   (select avg(x_m * x_m) from crossings c where c.job_key = r.job_key)
-           from runs r where r.study = ? and r.series like ? and r.series not like '%,%'"""
+           from runs r where r.study = ? and r.series like ? and r.series not like '%,%' and r.base_seed = ?"""
     out = collections.defaultdict(dict)
-    for series, point, rep, j_mid, first, mean_x, n, mean_x2 in db.execute(q, (f"calibrate:{study}", f"{key}=%")):
+    for series, point, rep, j_mid, first, mean_x, n, mean_x2 in db.execute(q, (f"calibrate:{study}", f"{key}=%", seed)):
         value = float(series.split("=", 1)[1])
         v = {}
         if j_mid and j_mid > 0: v["j_mid"] = math.log(j_mid)
@@ -51,11 +51,12 @@ def main(pass_dir):
     sums = collections.defaultdict(lambda: [0.0, 0.0, 0.0, 0])  # (observable, m) -> sab, saa, sbb, pairs
     twins = sorted((pass_dir / "twins").glob("*.toml"))
     for twin in twins:
-        free = tomllib.loads(twin.read_text())["free"]
+        spec = tomllib.loads(twin.read_text())
+        free = spec["free"]
         if len(free) != 1: continue
         key, lo, step = free[0]["key"], free[0]["lo"], free[0]["step"]
         on_grid = lambda v: abs((v - lo) / step - round((v - lo) / step)) < 1e-6  # not a fit re-scored on fresh seeds
-        values = {k: v for k, v in run_values(db, twin.stem, key).items() if on_grid(k[1])}
+        values = {k: v for k, v in run_values(db, twin.stem, key, spec["model"]["seed"]).items() if on_grid(k[1])}
         points = sorted({p for p, _ in values})
         for point in points:
             nodes = sorted(v for p, v in values if p == point)

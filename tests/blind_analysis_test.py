@@ -990,16 +990,16 @@ class GridRuns(unittest.TestCase):
         on 6 fresh runs. Replicate r at node k: J_mid = exp(1 + 0.1 r + 0.01 k) (the same error at every node:
         correlation +1, and the node means lie on a line: lack of fit 0); the crossings at x = (r - 2)(-1)^k mm
         (the error flips sign from node to node: -1 one step apart, +1 two apart), all at t = 2 s (no spread:
-        no first-crossing row). The re-score's J_mid: exp(1 + 0.2 r) for r = 0..5."""
+        no first-crossing row). The re-score's J_mid: exp(1 + 0.2 r) for r = 0..5. The twin's seed is 7."""
         (root / "twins").mkdir(parents=True)
         (root / "twins" / "t1.toml").write_text(
-            '[[free]]\nkey = "particles.friction_particle"\nlo = 0.1\nhi = 0.5\nstep = 0.1\n')
+            '[model]\nseed = 7\n\n[[free]]\nkey = "particles.friction_particle"\nlo = 0.1\nhi = 0.5\nstep = 0.1\n')
         db = sqlite3.connect(root / "runs.sqlite")
         db.execute("create table runs (job_key text, study text, series text, point integer, replicate integer, "
                    "base_seed integer, j_mid real)")
         db.execute("create table crossings (job_key text, id integer, t_s real, x_m real)")
-        def add(key, series, rep, j, xs):
-            db.execute("insert into runs values (?, 'calibrate:t1', ?, 0, ?, 7, ?)", (key, series, rep, j))
+        def add(key, series, rep, j, xs, seed=7):
+            db.execute("insert into runs values (?, 'calibrate:t1', ?, 0, ?, ?, ?)", (key, series, rep, seed, j))
             for n, x in enumerate(xs):
                 db.execute("insert into crossings values (?, ?, 2.0, ?)", (key, n, x))
         for k in range(5):
@@ -1008,6 +1008,8 @@ class GridRuns(unittest.TestCase):
                 add(f"g{k}{r}", f"particles.friction_particle={0.1 + 0.1 * k}", r, math.exp(1 + 0.1 * r + 0.01 * k), [x, x])
         for r in range(6):
             add(f"f{r}", "particles.friction_particle=0.25", r, math.exp(1 + 0.2 * r), [])
+        # A run on another seed that lands on a grid node: not a grid run (it would break every answer below).
+        add("o0", "particles.friction_particle=0.1", 0, 1e6, [0.5], seed=8)
         # A drag moved at the first three nodes (two keys: not grid runs), its shift in ln J_mid 0.05 (r + k) at
         # replicate r, node k: within each node a variance of 0.05^2 var(0..4), pooled over the nodes that plus
         # the nodes' spread.
