@@ -26,68 +26,32 @@ Observables on the loop's fit scales: J_mid, the first crossing's time and the c
 mean position (the exit offset, mm) linear. Twins with one free parameter only.
 """
 import collections
-import math
-import sqlite3
 import statistics
-import sys
-import tomllib
-from pathlib import Path
 
 import numpy as np
 
-OBSERVABLES = ("j_mid", "front_arrival", "exit_offset", "exit_spread")
+from grid_runs import OBSERVABLES, grid_level, one_parameter_twins, open_pass, runs
 
 
-def runs(db, study, key):
-    """[(parameter value, point, replicate, seed, {observable: fit-scale value})] of one twin's one-key series."""
-    q = """select r.series, r.point, r.replicate, r.base_seed, r.j_mid,
-                  (select min(t_s) from crossings c where c.job_key = r.job_key),
-                  (select avg(x_m) from crossings c where c.job_key = r.job_key),
-                  (select count(*) from crossings c where c.job_key = r.job_key),
-                  (select avg(x_m * x_m) from crossings c where c.job_key = r.job_key)
-           from runs r where r.study = ? and r.series like ? and r.series not like '%,%'"""
-    out = []
-    for series, point, rep, seed, j_mid, first, mean_x, n, mean_x2 in db.execute(q, (f"calibrate:{study}", f"{key}=%")):
-        v = {}
-        if j_mid and j_mid > 0: v["j_mid"] = math.log(j_mid)
-        if first and first > 0: v["front_arrival"] = math.log(first)
-        if n and n >= 1: v["exit_offset"] = mean_x * 1e3
-        if n and n >= 2:
-            var = (mean_x2 - mean_x * mean_x) * n / (n - 1)
-            if var > 0: v["exit_spread"] = math.log(math.sqrt(var) * 1e3)
-        out.append((float(series.split("=", 1)[1]), point, rep, seed, v))
-    return out
-
-
-def shift_spread(db, study, key, lo, step, grid_seed, spread):
+def shift_spread(twin_runs, lo, step, grid_seed, spread):
     """Adds, per observable, the shifts' variance pooled over the nodes and the within-node one to spread[obs]."""
-    q = """select r.series, r.point, r.replicate, r.base_seed, r.j_mid,
-                  (select min(t_s) from crossings c where c.job_key = r.job_key),
-                  (select avg(x_m) from crossings c where c.job_key = r.job_key)
-           from runs r where r.study = ? and r.series like ?"""
-    runs_at = collections.defaultdict(dict)      # (level, effect, point, seed) -> replicate -> {obs: value}
-    moved = collections.defaultdict(set)         # (effect, seed) -> grid levels moved
-    for series, point, rep, seed, j_mid, first, mean_x in db.execute(q, (f"calibrate:{study}", f"{key}=%")):
-        parts = [p.split("=", 1) for p in series.split(", ")]
-        if parts[0][0] != key or len(parts) > 2: continue
-        level = (float(parts[0][1]) - lo) / step
-        if abs(level - round(level)) > 1e-6: continue
-        effect = (parts[1][0], round(float(parts[1][1]), 9)) if len(parts) == 2 else None
-        v = {}
-        if j_mid and j_mid > 0: v["j_mid"] = math.log(j_mid)
-        if first and first > 0: v["front_arrival"] = math.log(first)
-        if mean_x is not None: v["exit_offset"] = mean_x * 1e3
-        runs_at[(round(level), effect, point, seed)][rep] = v
-        if effect: moved[(effect, seed)].add(round(level))
-    for (effect, seed), levels in moved.items():
-        if len(levels) < 3 or seed != grid_seed: continue   # paired with the grid's runs: on its seed
-        points = {k[2] for k in runs_at if k[1] == effect and k[3] == seed}
+    runs_at = collections.defaultdict(dict)      # (level, effect, point) -> replicate -> {obs: value}, grid's seed
+    moved = collections.defaultdict(set)         # effect -> grid levels moved
+    for parts, point, rep, seed, v in twin_runs:
+        level = grid_level(parts[0][1], lo, step)
+        if seed != grid_seed or level is None or len(parts) > 2: continue   # paired with the grid's runs: its seed
+        effect = (parts[1][0], round(parts[1][1], 9)) if len(parts) == 2 else None
+        runs_at[(level, effect, point)][rep] = v
+        if effect: moved[effect].add(level)
+    for effect, levels in moved.items():
+        if len(levels) < 3: continue
+        points = {k[2] for k in runs_at if k[1] == effect}
         for obs in OBSERVABLES:
             for point in points:
                 by_node = []
                 for level in sorted(levels):
-                    base = runs_at.get((level, None, point, seed), {})
-                    d = [v[obs] - base[rep][obs] for rep, v in runs_at.get((level, effect, point, seed), {}).items()
+                    base = runs_at.get((level, None, point), {})
+                    d = [v[obs] - base[rep][obs] for rep, v in runs_at.get((level, effect, point), {}).items()
                          if obs in v and obs in base.get(rep, {})]
                     if len(d) >= 2: by_node.append(d)
                 if len(by_node) < 3: continue
@@ -116,35 +80,30 @@ def lack_of_fit(grid, lack):
                 lack[obs][1] += 2
 
 
-def main(pass_dir):
-    pass_dir = Path(pass_dir)
-    db = sqlite3.connect(f"file:{pass_dir / 'runs.sqlite'}?mode=ro", uri=True)
+def main(pass_dir, db):
     lack = collections.defaultdict(lambda: [0.0, 0])
     ratios = collections.defaultdict(list)
     spread = collections.defaultdict(lambda: [0.0, 0.0, 0])
-    for twin in sorted((pass_dir / "twins").glob("*.toml")):
-        spec = tomllib.loads(twin.read_text())
-        free, seed = spec["free"], spec["model"]["seed"]
-        if len(free) != 1: continue
-        key, lo, step = free[0]["key"], free[0]["lo"], free[0]["step"]
+    for study, key, lo, step, seed in one_parameter_twins(pass_dir):
+        twin_runs = runs(db, study, key)
         grid = collections.defaultdict(lambda: collections.defaultdict(list))   # (obs, point) -> level -> values
-        fresh = collections.defaultdict(list)                                    # (obs, point, value) -> values
-        for value, point, _, run_seed, v in runs(db, twin.stem, key):
-            level = (value - lo) / step
-            on_grid = abs(level - round(level)) < 1e-6 and run_seed == seed   # not a re-score landing on a node
+        other = collections.defaultdict(list)                                    # (obs, point, value, seed) -> values
+        for parts, point, _, run_seed, v in twin_runs:
+            if len(parts) != 1: continue
+            level = grid_level(parts[0][1], lo, step)
             for obs, x in v.items():
-                if on_grid: grid[(obs, point)][round(level)].append(x)
-                else: fresh[(obs, point, value)].append(x)
+                if level is not None and run_seed == seed: grid[(obs, point)][level].append(x)
+                else: other[(obs, point, parts[0][1], run_seed)].append(x)
         lack_of_fit(grid, lack)
-        shift_spread(db, twin.stem, key, lo, step, seed, spread)
-        for (obs, point, _), xs in fresh.items():
+        shift_spread(twin_runs, lo, step, seed, spread)
+        for (obs, point, _, _), xs in other.items():
             nodes = [reps for reps in grid[(obs, point)].values() if len(reps) >= 2]
             within = sum(np.var(r, ddof=1) * (len(r) - 1) for r in nodes)
             dof = sum(len(r) - 1 for r in nodes)
             if len(xs) >= 6 and dof >= 20 and within > 0:
                 ratios[obs].append(np.var(xs, ddof=1) / (within / dof))
     print(f"{pass_dir.name}: per observable, (1) the 5-node quadratic's lack of fit over the grid (dof), "
-          "(2) fresh re-scores' per-run variance over the grid's: mean, median (re-scores), (3) an effect's shifts: "
+          "(2) runs on other seeds: per-run variance over the grid's, mean, median (groups), (3) an effect's shifts: "
           "variance pooled over the nodes over the within-node one (sizes x points)")
     for obs in OBSERVABLES:
         s, dof = lack[obs]
@@ -157,11 +116,4 @@ def main(pass_dir):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        print(__doc__, file=sys.stderr)
-        sys.exit(2)
-    folder = Path(sys.argv[1])
-    if not (folder / "runs.sqlite").is_file() or not (folder / "twins").is_dir():
-        print(f"error: {folder} is not a blind pass with its store (runs.sqlite and twins/ expected)", file=sys.stderr)
-        sys.exit(2)
-    main(folder)
+    main(*open_pass(__doc__))

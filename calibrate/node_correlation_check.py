@@ -15,51 +15,21 @@ effect responses' nor the fits' re-scores on other seeds.
 """
 import collections
 import math
-import sqlite3
-import sys
-import tomllib
-from pathlib import Path
 
-OBSERVABLES = ("j_mid", "front_arrival", "exit_offset", "exit_spread")
+from grid_runs import OBSERVABLES, grid_level, one_parameter_twins, open_pass, runs
 
 
-def run_values(db, study, key, seed):
-    """{(point, node value): {replicate: {observable: fit-scale value}}} of one twin's runs on its data file's seed."""
-    q = """select r.series, r.point, r.replicate, r.j_mid,
-                  (select min(t_s) from crossings c where c.job_key = r.job_key),
-                  (select avg(x_m) from crossings c where c.job_key = r.job_key),
-                  (select count(*) from crossings c where c.job_key = r.job_key),
-                  (select avg(x_m * x_m) from crossings c where c.job_key = r.job_key)
-           from runs r where r.study = ? and r.series like ? and r.series not like '%,%' and r.base_seed = ?"""
-    out = collections.defaultdict(dict)
-    for series, point, rep, j_mid, first, mean_x, n, mean_x2 in db.execute(q, (f"calibrate:{study}", f"{key}=%", seed)):
-        value = float(series.split("=", 1)[1])
-        v = {}
-        if j_mid and j_mid > 0: v["j_mid"] = math.log(j_mid)
-        if first and first > 0: v["front_arrival"] = math.log(first)
-        if n and n >= 1: v["exit_offset"] = mean_x * 1e3
-        if n and n >= 2:
-            var = (mean_x2 - mean_x * mean_x) * n / (n - 1)
-            if var > 0: v["exit_spread"] = math.log(math.sqrt(var) * 1e3)
-        out[(point, value)][rep] = v
-    return out
-
-
-def main(pass_dir):
-    pass_dir = Path(pass_dir)
-    db = sqlite3.connect(f"file:{pass_dir / 'runs.sqlite'}?mode=ro", uri=True)
+def main(pass_dir, db):
     sums = collections.defaultdict(lambda: [0.0, 0.0, 0.0, 0])  # (observable, m) -> sab, saa, sbb, pairs
-    twins = sorted((pass_dir / "twins").glob("*.toml"))
-    for twin in twins:
-        spec = tomllib.loads(twin.read_text())
-        free = spec["free"]
-        if len(free) != 1: continue
-        key, lo, step = free[0]["key"], free[0]["lo"], free[0]["step"]
-        on_grid = lambda v: abs((v - lo) / step - round((v - lo) / step)) < 1e-6  # not a fit re-scored on fresh seeds
-        values = {k: v for k, v in run_values(db, twin.stem, key, spec["model"]["seed"]).items() if on_grid(k[1])}
-        points = sorted({p for p, _ in values})
-        for point in points:
-            nodes = sorted(v for p, v in values if p == point)
+    twins = list(one_parameter_twins(pass_dir))
+    for study, key, lo, step, seed in twins:
+        values = collections.defaultdict(dict)   # (point, level) -> replicate -> {observable: value}
+        for parts, point, rep, run_seed, v in runs(db, study, key):
+            level = grid_level(parts[0][1], lo, step)
+            if len(parts) == 1 and level is not None and run_seed == seed:
+                values[(point, level)][rep] = v
+        for point in sorted({p for p, _ in values}):
+            nodes = sorted(level for p, level in values if p == point)
             for obs in OBSERVABLES:
                 centred = {}
                 for node in nodes:
@@ -70,8 +40,7 @@ def main(pass_dir):
                 ordered = sorted(centred)
                 for a in range(len(ordered)):
                     for b in range(a + 1, len(ordered)):
-                        m = round((ordered[b] - ordered[a]) / step)
-                        s = sums[(obs, m)]
+                        s = sums[(obs, ordered[b] - ordered[a])]
                         x, y = centred[ordered[a]], centred[ordered[b]]
                         for r in x.keys() & y.keys():
                             s[0] += x[r] * y[r]; s[1] += x[r] ** 2; s[2] += y[r] ** 2; s[3] += 1
@@ -88,11 +57,4 @@ def main(pass_dir):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        print(__doc__, file=sys.stderr)
-        sys.exit(2)
-    folder = Path(sys.argv[1])
-    if not (folder / "runs.sqlite").is_file() or not (folder / "twins").is_dir():
-        print(f"error: {folder} is not a blind pass with its store (runs.sqlite and twins/ expected)", file=sys.stderr)
-        sys.exit(2)
-    main(folder)
+    main(*open_pass(__doc__))

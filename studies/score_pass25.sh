@@ -36,17 +36,7 @@ passes=$(printf 'results/calibration-blind-pass%s ' 10 12 13 14 15 16 17 18 19 2
 /usr/bin/python3 calibrate/visibility_ceiling.py --by-case $passes > $P/pooled_passes_10_12-21_23-25.txt
 # Issue 13's fourth bar, as pass 24 scored it: where an alternative is named and the drag's law is not
 # established, and no failed test is said first, the verdict ends with the law's reservation.
-/usr/bin/python3 - $P/cases.csv > $P/reservations.txt <<'PY'
-import csv, sys
-LAW = "the drag's law in the speed is not established: a drag of another law may be acting"
-both = [r for r in csv.DictReader(open(sys.argv[1]))
-        if r["alternatives"] not in ("", "none") and any(a not in ("", "none") for a in r["alternatives"].split("; "))
-        and r["law_undetermined"] == "True" and r["verdict"].startswith("effect found; these data")]
-for r in both:
-    print(f"{r['case']}: {'both reservations' if r['verdict'].endswith(LAW) else 'LAW RESERVATION MISSING'}: {r['verdict']}")
-print(f"calibrations with both reservations due: {len(both)}; missing the law's: "
-      f"{sum(not r['verdict'].endswith(LAW) for r in both)}")
-PY
+/usr/bin/python3 calibrate/reservations_check.py $P/cases.csv > $P/reservations.txt
 # The control: pass 24's loop on the same twins and store.
 if [[ $# -ge 2 ]]; then export ONLY=$2; fi
 GAPFLOW=/work/bin-p25c/gapflow studies/calibration_replay.sh /work/pass25 replay-loop-p24 2

@@ -1045,5 +1045,30 @@ class GridRuns(unittest.TestCase):
             self.assertEqual(run(script)[0], 2)
 
 
+class Reservations(unittest.TestCase):
+    """calibrate/reservations_check.py: both reservations where both are due."""
+
+    def test_names_a_verdict_that_drops_the_laws_reservation(self):
+        law = "the drag's law in the speed is not established: a drag of another law may be acting"
+        found = "effect found; these data do not exclude another effect in its place"
+        rows = [("a", "linear_drag", "True", f"{found}; {law}"),    # both, as due
+                ("b", "rolling_resistance", "True", found),          # the law's missing
+                ("c", "none", "True", found),                        # no alternative: not due
+                ("d", "linear_drag", "False", found)]                # the law established: not due
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp, "cases.csv")
+            with open(path, "w", newline="") as f:
+                w = csv.writer(f)
+                w.writerow(["case", "alternatives", "law_undetermined", "verdict"])
+                w.writerows(rows)
+            code, out, err = run("reservations_check.py", path)
+            self.assertEqual(code, 0, err)
+            self.assertIn("a: both reservations", out)
+            self.assertIn("b: LAW RESERVATION MISSING", out)
+            self.assertIn("calibrations with both reservations due: 2; missing the law's: 1", out)
+        self.assertEqual(run("reservations_check.py", "/nonexistent.csv")[0], 2)
+        self.assertEqual(run("reservations_check.py")[0], 2)
+
+
 if __name__ == "__main__":
     unittest.main()
