@@ -100,8 +100,12 @@ NodeCorrelations node_correlations(const DataFile& data, const std::vector<Param
 std::string node_correlation_text(const NodeCorrelations& c) {
   std::vector<std::string> parts;
   for (const ObservableCorrelation& o : c.observables)
-    parts.push_back(o.points > 0 ? fmt::format("{} {:+.2f} ({} points)", to_string(o.observable), o.neighbours, o.points)
-                                 : fmt::format("{} none (no point with every replicate at every node)", to_string(o.observable)));
+    if (o.points == 0)
+      parts.push_back(fmt::format("{} none (no point with every replicate at every node)", to_string(o.observable)));
+    else if (std::isnan(o.neighbours))
+      parts.push_back(fmt::format("{} n/a (one node)", to_string(o.observable)));
+    else
+      parts.push_back(fmt::format("{} {:+.2f} ({} points)", to_string(o.observable), o.neighbours, o.points));
   return fmt::format("  the replicates' correlation between neighbouring nodes, counted in the surface's variance: {}",
                      fmt::join(parts, ", "));
 }

@@ -142,6 +142,11 @@ TEST(NodeCorrelation, APointLackingAReplicateIsLeftOutAndNodesWithoutReplicatesA
     EXPECT_TRUE(c.matrix.isIdentity());
   }
   EXPECT_NE(node_correlation_text(none).find("none"), std::string::npos);
+  // One node (a data file without free parameters): no pair to correlate, and the log says so.
+  const BaselineFit again = nodes_with(design, 0.05, 0.05, 22);
+  const NodeCorrelations one = node_correlations(design, {again.grid[0]}, {again.grid_predictions[0]});
+  EXPECT_TRUE(one.observables.front().matrix.isIdentity());
+  EXPECT_NE(node_correlation_text(one).find("n/a (one node)"), std::string::npos) << node_correlation_text(one);
 }
 
 TEST(SurfaceNoise, IndependentNodesAreCountedAsIndependent) {
