@@ -15,20 +15,71 @@ namespace gapflow {
 
 namespace {
 
-// Paired replicate differences (moved - reference) at point i over the reference's
-// nodes, divided by `per`: moved[first + n] is node n moved.
-std::vector<double> paired_differences(const std::vector<Prediction>& moved, std::size_t first, const Reference& at,
-                                       std::size_t i, double per) {
+// Paired replicate differences (moved - reference) at point i over the reference's nodes, divided
+// by `per`, in one order (node by node, replicate by replicate; NaN where either run is missing):
+// moved[first + n] is node n moved.
+std::vector<double> aligned_differences(const std::vector<Prediction>& moved, std::size_t first, const Reference& at,
+                                        std::size_t i, double per) {
   std::vector<double> d;
   for (std::size_t n = 0; n < at.nodes.size(); ++n) {
     const Prediction& m = moved[first + n];
     const Prediction& b = at.predictions[n];
-    for (std::size_t r = 0; r < b.replicate_fit[i].size(); ++r) {
-      const double x = m.replicate_fit[i][r], y = b.replicate_fit[i][r];
-      if (x == x && y == y) d.push_back((x - y) / per);
-    }
+    for (std::size_t r = 0; r < b.replicate_fit[i].size(); ++r)
+      d.push_back((m.replicate_fit[i][r] - b.replicate_fit[i][r]) / per);
   }
   return d;
+}
+
+std::vector<double> without_missing(std::vector<double> d) {
+  d.erase(std::remove_if(d.begin(), d.end(), [](double x) { return std::isnan(x); }), d.end());
+  return d;
+}
+
+// The same, only the pairs with both runs.
+std::vector<double> paired_differences(const std::vector<Prediction>& moved, std::size_t first, const Reference& at,
+                                       std::size_t i, double per) {
+  return without_missing(aligned_differences(moved, first, at, i, per));
+}
+
+// Per data point, its observable's index in the order they first appear: the groups a term's sizes'
+// correlation is pooled over (as the nodes' is, node_correlation.hpp).
+std::vector<std::size_t> observable_groups(const DataFile& data) {
+  std::vector<ObservableKind> seen;
+  std::vector<std::size_t> out;
+  for (const DataPoint& p : data.points) {
+    const auto k = static_cast<std::size_t>(std::find(seen.begin(), seen.end(), p.observable) - seen.begin());
+    if (k == seen.size()) seen.push_back(p.observable);
+    out.push_back(k);
+  }
+  return out;
+}
+
+// One log line: per observable, the mean correlation of the errors of neighbouring sizes' shifts
+// (neutral's excluded: its shift is exact), or that the bound is used.
+std::string size_correlation_text(const EffectTerm& t, const DataFile& data) {
+  if (t.size_correlation.empty())
+    return fmt::format("{}: its sizes' errors' correlation is not known (not every size paired alike): their variance "
+                       "is the bound over correlations in [0, 1]", t.effect);
+  std::vector<std::string> parts;
+  for (std::size_t g = 0; g < t.size_correlation.size(); ++g) {
+    const auto first = static_cast<std::size_t>(std::find(t.pooled_in.begin(), t.pooled_in.end(), g) - t.pooled_in.begin());
+    const std::string name = first < data.points.size() ? to_string(data.points[first].observable) : "all";
+    const SizeCorrelation& c = t.size_correlation[g];
+    if (c.points == 0) {
+      parts.push_back(fmt::format("{} none (the bound)", name));
+      continue;
+    }
+    double sum = 0;
+    int n = 0;
+    for (std::size_t j = 0; j + 1 < t.offsets.size(); ++j) {
+      if (t.offsets[j] == 0 || t.offsets[j + 1] == 0) continue;
+      sum += c.matrix(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j + 1)), ++n;
+    }
+    parts.push_back(n > 0 ? fmt::format("{} {:+.2f} ({} points)", name, sum / n, c.points)
+                          : fmt::format("{} n/a (one size)", name));
+  }
+  return fmt::format("  {}: its sizes' errors correlate between neighbouring sizes, counted in its variance: {}", t.effect,
+                     fmt::join(parts, ", "));
 }
 
 // The nodes a term measured at `at` pairs its moved runs with: the reference's, when its runs
@@ -318,15 +369,19 @@ void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std:
   say_(fmt::format("{}: response measured at {} {}size(s) ({}) at {} node(s)", c.effect, offsets.size(),
                    term.offsets.size() > 1 ? "more " : "", fmt::join(offsets, ", "), at.nodes.size()));
   const std::vector<Prediction> moved = evaluate_at(at, sets);
+  term.pooled_in = observable_groups(data_);
   for (std::size_t k = 0; k < offsets.size(); ++k) {
     std::vector<double> shift, se;
+    std::vector<std::vector<double>> pairs;
     for (std::size_t i = 0; i < data_.points.size(); ++i) {
-      const Summary s = summarize(paired_differences(moved, k * at.nodes.size(), at, i, 1.0));
+      pairs.push_back(aligned_differences(moved, k * at.nodes.size(), at, i, 1.0));
+      const Summary s = summarize(without_missing(pairs.back()));
       shift.push_back(s.n >= 2 ? s.mean : 0.0);
       se.push_back(s.n >= 2 ? s.se() : 0.0);
     }
-    term.add_size(offsets[k], shift, se);
+    term.add_size(offsets[k], shift, se, std::move(pairs));
   }
+  say_(size_correlation_text(term, data_));
 }
 
 // Whether every point makes a valid scenario with `key` = value (where the key applies).

@@ -1,5 +1,7 @@
 #include "calibrate/effect_term.hpp"
 
+#include "calibrate/node_correlation.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -66,9 +68,10 @@ SmoothResponse smooth_response(const std::vector<double>& x, std::vector<double>
   return r;
 }
 
-// The largest variance of sum_j w_j e_j over the sizes' errors e_j (standard errors s_j) when their
-// correlations lie in [0, 1] (the sizes' shifts share the neutral runs and their seeds, which
-// correlates them positively; a negative correlation is not allowed for): it is linear in each
+// Where the sizes' correlation is not known (a term whose sizes are not all paired alike; every term
+// in blind passes up to 25): the largest variance of sum_j w_j e_j over the sizes' errors e_j
+// (standard errors s_j) when their correlations lie in [0, 1] (the sizes' shifts share the neutral
+// runs and their seeds, which correlates them positively; a negative correlation is not allowed for): it is linear in each
 // correlation, so the largest is at 1 where the two weights agree in sign and 0 where
 // they do not, (sum of w_j s_j over w_j > 0)^2 + (sum of |w_j| s_j over w_j < 0)^2. For a straight
 // line between two sizes this is ((1-w) sa + w sb)^2 (exact next to neutral, where sa = 0), and
@@ -83,6 +86,59 @@ struct VarianceBound {
   void add(double weight, double se) { (weight > 0 ? positive : negative) += std::abs(weight) * se; }
   double value() const { return positive * positive + negative * negative; }
 };
+
+// Point i's pairs at every size but neutral, [pair][size], the pairs complete at every such size only,
+// each column standardized (node_correlation.hpp); empty with fewer than 3 such pairs or a size whose
+// differences do not vary (a point the effect does not reach: its runs are identical).
+Eigen::MatrixXd standardized_pairs(const EffectTerm& t, std::size_t i, const std::vector<std::size_t>& sizes) {
+  const std::size_t n = t.pairs[sizes.front()][i].size();
+  std::vector<std::size_t> complete;
+  for (std::size_t r = 0; r < n; ++r)
+    if (std::all_of(sizes.begin(), sizes.end(), [&](std::size_t j) { return std::isfinite(t.pairs[j][i][r]); }))
+      complete.push_back(r);
+  if (complete.size() < 3) return {};
+  Eigen::MatrixXd z(static_cast<Eigen::Index>(complete.size()), static_cast<Eigen::Index>(sizes.size()));
+  for (std::size_t r = 0; r < complete.size(); ++r)
+    for (std::size_t k = 0; k < sizes.size(); ++k)
+      z(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = t.pairs[sizes[k]][i][complete[r]];
+  return standardize_columns(z) ? z : Eigen::MatrixXd{};
+}
+
+// The sizes' correlation per group of points; none (empty) unless every size but neutral has its
+// pairs, the same number at each point.
+std::vector<SizeCorrelation> size_correlations(const EffectTerm& t) {
+  std::vector<std::size_t> sizes;  // those with pairs: every one but neutral
+  for (std::size_t j = 0; j < t.offsets.size(); ++j) {
+    if (t.offsets[j] == 0) continue;
+    if (t.pairs[j].size() != t.shift[j].size()) return {};
+    sizes.push_back(j);
+  }
+  if (sizes.empty()) return {};
+  for (std::size_t i = 0; i < t.shift.front().size(); ++i)
+    for (std::size_t j : sizes)
+      if (t.pairs[j][i].size() != t.pairs[sizes.front()][i].size()) return {};
+  const std::size_t groups = t.pooled_in.empty() ? 1 : *std::max_element(t.pooled_in.begin(), t.pooled_in.end()) + 1;
+  const auto m = static_cast<Eigen::Index>(sizes.size());
+  std::vector<Eigen::MatrixXd> gram(groups, Eigen::MatrixXd::Zero(m, m));
+  std::vector<SizeCorrelation> out(groups);
+  for (std::size_t i = 0; i < t.shift.front().size(); ++i) {
+    const Eigen::MatrixXd z = standardized_pairs(t, i, sizes);
+    if (z.size() == 0) continue;
+    const std::size_t g = t.pooled_in.empty() ? 0 : t.pooled_in[i];
+    gram[g] += z.transpose() * z;
+    ++out[g].points;
+  }
+  const auto all = static_cast<Eigen::Index>(t.offsets.size());
+  for (std::size_t g = 0; g < groups; ++g) {
+    if (out[g].points == 0) continue;
+    out[g].matrix = Eigen::MatrixXd::Identity(all, all);
+    for (Eigen::Index a = 0; a < m; ++a)
+      for (Eigen::Index b = 0; b < m; ++b)
+        out[g].matrix(static_cast<Eigen::Index>(sizes[static_cast<std::size_t>(a)]),
+                      static_cast<Eigen::Index>(sizes[static_cast<std::size_t>(b)])) = gram[g](a, b) / out[g].points;
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -100,15 +156,20 @@ EffectTerm EffectTerm::single_step(std::string effect, std::string key, double n
   return t;
 }
 
-void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<double> se_at) {
+void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<double> se_at,
+                          std::vector<std::vector<double>> pairs_at) {
+  pairs.resize(offsets.size());  // a term made field by field has none
   const auto k = static_cast<std::size_t>(std::lower_bound(offsets.begin(), offsets.end(), da) - offsets.begin());
   if (k < offsets.size() && offsets[k] == da) {
-    shift[k] = std::move(shift_at), shift_se[k] = std::move(se_at);
+    shift[k] = std::move(shift_at), shift_se[k] = std::move(se_at), pairs[k] = std::move(pairs_at);
   } else {
-    offsets.insert(offsets.begin() + static_cast<std::ptrdiff_t>(k), da);
-    shift.insert(shift.begin() + static_cast<std::ptrdiff_t>(k), std::move(shift_at));
-    shift_se.insert(shift_se.begin() + static_cast<std::ptrdiff_t>(k), std::move(se_at));
+    const auto at = static_cast<std::ptrdiff_t>(k);
+    offsets.insert(offsets.begin() + at, da);
+    shift.insert(shift.begin() + at, std::move(shift_at));
+    shift_se.insert(shift_se.begin() + at, std::move(se_at));
+    pairs.insert(pairs.begin() + at, std::move(pairs_at));
   }
+  size_correlation = size_correlations(*this);
   smooth.assign(shift.front().size(), nullptr);
   if (offsets.size() < 4) return;  // PCHIP needs four sizes
   for (std::size_t i = 0; i < smooth.size(); ++i) {
@@ -149,9 +210,16 @@ double EffectTerm::response(std::size_t i, double da, double& variance, double* 
   if (offsets.size() < 2) return variance = 0, 0.0;
   double value = 0;
   const std::vector<double> w = weights(i, da, value);
-  VarianceBound bound;
-  for (std::size_t j = 0; j < offsets.size(); ++j) bound.add(w[j], shift_se[j][i]);
-  variance = bound.value();
+  const std::size_t group = pooled_in.empty() || i >= pooled_in.size() ? 0 : pooled_in[i];
+  if (group < size_correlation.size() && size_correlation[group].points > 0) {
+    Eigen::VectorXd ws(static_cast<Eigen::Index>(offsets.size()));
+    for (std::size_t j = 0; j < offsets.size(); ++j) ws(static_cast<Eigen::Index>(j)) = w[j] * shift_se[j][i];
+    variance = std::max(ws.dot(size_correlation[group].matrix * ws), 0.0);  // a Gram matrix: never below 0 but by rounding
+  } else {
+    VarianceBound bound;
+    for (std::size_t j = 0; j < offsets.size(); ++j) bound.add(w[j], shift_se[j][i]);
+    variance = bound.value();
+  }
   if (paired_covariance && !paired_with.empty())
     for (std::size_t j = 0; j < offsets.size(); ++j) *paired_covariance -= w[j] * shift_se[j][i] * shift_se[j][i] / 2;
   return value;

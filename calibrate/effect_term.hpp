@@ -4,6 +4,8 @@
 
 #include "calibrate/evaluator.hpp"
 
+#include <Eigen/Dense>
+
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -13,6 +15,15 @@ namespace gapflow {
 
 // One point's response through an effect's measured sizes: a shape-preserving cubic (effect_term.cpp).
 struct SmoothResponse;
+
+// How the errors of a term's sizes' shifts correlate, pooled over a group of points (one observable's):
+// every size's moved runs are paired with the same nodes' runs on the same seeds, so each shift carries
+// minus those runs' noise, and each moved run keeps some of its partner's and its neighbours' (common
+// random numbers). For moved runs that keep nothing of their partners the shifts correlate 1/2.
+struct SizeCorrelation {
+  int points = 0;          // points pooled (0: none could be; the term's variance is then the bound)
+  Eigen::MatrixXd matrix;  // [size][size] over EffectTerm::offsets, unit diagonal (neutral's row the identity's)
+};
 
 // An effect term of the surface: the shift of every point's fit-scale value when
 // the effect's key moves from its neutral value, measured under common random
@@ -43,18 +54,31 @@ struct EffectTerm {
   // baseline grid nodes, the surface's quadratic goes through the same runs, and the two parts of
   // a prediction share their noise (Surface::predict_fit).
   std::vector<ParameterSet> paired_with;
+  // The paired differences behind each size's shift, [size][point][pair], the pairs in one order at
+  // every size (node by node, replicate by replicate; NaN where a run is missing); empty at a size
+  // measured otherwise (a signature's, and neutral, whose shift is 0 exactly). Where every size but
+  // neutral has them, their correlation is counted in the variance (`size_correlation`).
+  std::vector<std::vector<std::vector<double>>> pairs;
+  std::vector<std::size_t> pooled_in;  // per point: the group whose points the correlation pools (empty: one group)
+  std::vector<SizeCorrelation> size_correlation;  // [group]; empty where not every size has its pairs
 
   // A term measured at one step: shift = slope * step.
   static EffectTerm single_step(std::string effect, std::string key, double neutral, double lo, double hi, double step,
                                 std::vector<double> slope, std::vector<double> slope_se);
-  // Add the shifts measured at offset `da` (kept sorted); the interpolants are made anew.
-  void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at);
-  // Shift at point i for an offset da, and its variance: the largest over the sizes' errors'
-  // correlations in [0, 1] of the interpolant's weights on the sizes (for a straight line 1 - w and
-  // w; the cubic also leans on the next sizes, its weights by finite differences, the larger
-  // one-sided one where it is not smooth). Before 422ca03 (blind passes up to 20) the two neighbours'
-  // standard errors were interpolated linearly, which understated the cubic's by 14 % at 3 deg on the
-  // tilt's quadratic.
+  // Add the shifts measured at offset `da` (kept sorted), with the paired differences they are the
+  // means of where given ([point][pair]); the interpolants and the sizes' correlation are made anew.
+  void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at,
+                std::vector<std::vector<double>> pairs_at = {});
+  // Shift at point i for an offset da, and its variance through the interpolant's weights on the
+  // sizes (for a straight line 1 - w and w; the cubic also leans on the next sizes, its weights by
+  // finite differences, the larger one-sided one where it is not smooth): with the sizes'
+  // correlation where it is counted (size_correlation), else the largest over correlations in
+  // [0, 1]. That bound stated 1.3-1.8 times the shift's spread between the sizes where the shifts
+  // correlate 1/2, and up to 2.2 times where they correlate 0.9, since where the weights differ in
+  // sign it takes the errors as independent where they cancel (tests/test_calibration_observables.cpp,
+  // TheSizesCorrelationReadOffTheirPairs...). Before 422ca03
+  // (blind passes up to 20) the two neighbours' standard errors were interpolated linearly, which
+  // understated the cubic's by 14 % at 3 deg on the tilt's quadratic.
   // With `paired_covariance`, also the covariance of that shift with the mean of one paired node's
   // runs at point i (each such node alike; 0 without paired nodes): -(sum_j w_j shift_se_j^2) / 2
   // over the same weights w_j (derived in effect_term.cpp). Negative: a node's runs enter the shift

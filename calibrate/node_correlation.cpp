@@ -25,13 +25,7 @@ Eigen::MatrixXd standardized(const std::vector<Prediction>& preds, std::size_t i
       z(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = v;
     }
   }
-  for (Eigen::Index k = 0; k < z.cols(); ++k) {
-    z.col(k).array() -= z.col(k).mean();
-    const double norm = z.col(k).norm();
-    if (!(norm > 0)) return {};
-    z.col(k) /= norm;  // each point weighs alike, whatever its scale and replicate count
-  }
-  return z;
+  return standardize_columns(z) ? z : Eigen::MatrixXd{};
 }
 
 // The node pairs nearest each other, each parameter scaled by its range over the nodes.
@@ -83,6 +77,16 @@ ObservableCorrelation pooled(const DataFile& data, ObservableKind kind, const st
 }
 
 }  // namespace
+
+bool standardize_columns(Eigen::MatrixXd& z) {
+  for (Eigen::Index k = 0; k < z.cols(); ++k) {
+    z.col(k).array() -= z.col(k).mean();
+    const double norm = z.col(k).norm();
+    if (!(norm > 0)) return false;
+    z.col(k) /= norm;  // each point weighs alike, whatever its scale and replicate count
+  }
+  return true;
+}
 
 NodeCorrelations node_correlations(const DataFile& data, const std::vector<ParameterSet>& nodes,
                                    const std::vector<Prediction>& preds) {

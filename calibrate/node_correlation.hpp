@@ -50,6 +50,11 @@ struct NodeCorrelations {
 NodeCorrelations node_correlations(const DataFile& data, const std::vector<ParameterSet>& nodes,
                                    const std::vector<Prediction>& preds);
 
+// Each column of z (one point's replicates of one quantity, a row per replicate) centred and scaled to
+// unit length, so that z^T z is their correlation matrix and one point's adds to a pooled Gram matrix
+// with the weight of any other's; false (z left part done) when a column has no spread.
+bool standardize_columns(Eigen::MatrixXd& z);
+
 // One log line: the neighbours' correlation per observable and how many points it pools.
 std::string node_correlation_text(const NodeCorrelations& c);
 
