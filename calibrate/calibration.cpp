@@ -166,6 +166,7 @@ class Loop {
       reference.reset();
     }
     refresh_added_sizes(surface, state);
+    record_size_correlations(surface);
   }
 
  private:
@@ -498,6 +499,13 @@ class Loop {
       a.lo95 = f.interval.lo, a.hi95 = f.interval.hi, a.interval_bounded = f.interval.bounded_lo && f.interval.bounded_hi;
     }
     say(fmt::format("the added effects re-taken on the final surface: {}", state.params.label()));
+  }
+
+  // Each added effect's sizes' correlation as its final term counts it.
+  void record_size_correlations(const Surface& surface) {
+    for (AddedEffect& a : out_.effects)
+      for (const EffectTerm& t : surface.effects)
+        if (t.effect == a.effect) a.size_correlation = t.neighbour_correlation();
   }
 
   std::string added_text(const Candidate& c, const Round& round, const Trial& t, double bic_before) const {

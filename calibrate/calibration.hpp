@@ -37,6 +37,7 @@
 #include "calibrate/evaluator.hpp"
 #include "calibrate/form_check.hpp"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -155,6 +156,9 @@ struct AddedEffect {
   double neutral = 0, value = 0;   // key units
   double lo95 = 0, hi95 = 0;       // profile interval of value
   bool interval_bounded = true;
+  // Its term's errors' mean correlation between neighbouring sizes, counted in its variance
+  // (EffectTerm::neighbour_correlation); NaN where the bound over correlations in [0, 1] was used.
+  double size_correlation = NAN;
 };
 
 struct CalibrationResult {

@@ -166,10 +166,11 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
   o << "  \"effects\": [";
   for (std::size_t i = 0; i < r.effects.size(); ++i) {
     const AddedEffect& e = r.effects[i];
-    o << fmt::format(R"({}{{"effect": {}, "key": {}, "group": {}, "alternatives": {}, "neutral": {}, "value": {}, "lo95": {}, "hi95": {}, "interval_bounded": {}}})",
+    o << fmt::format(R"({}{{"effect": {}, "key": {}, "group": {}, "alternatives": {}, "neutral": {}, "value": {}, "lo95": {}, "hi95": {}, "interval_bounded": {}, "size_correlation": {}}})",
                      i ? ", " : "", json_string(e.effect), json_string(e.key), json_list(e.group),
                      json_list(e.alternatives), json_number(e.neutral),
-                     json_number(e.value), json_number(e.lo95), json_number(e.hi95), e.interval_bounded ? "true" : "false");
+                     json_number(e.value), json_number(e.lo95), json_number(e.hi95), e.interval_bounded ? "true" : "false",
+                     json_number(e.size_correlation));
   }
   o << "],\n";
   o << fmt::format("  \"law_power\": {},\n  \"law_undetermined\": {},\n", json_number(r.law_power),

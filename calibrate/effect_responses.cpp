@@ -58,28 +58,25 @@ std::vector<std::size_t> observable_groups(const DataFile& data) {
 // (neutral's excluded: its shift is exact), or that the bound is used.
 std::string size_correlation_text(const EffectTerm& t, const DataFile& data) {
   if (t.size_correlation.empty())
-    return fmt::format("{}: its sizes' errors' correlation is not known (not every size paired alike): their variance "
-                       "is the bound over correlations in [0, 1]", t.effect);
+    return fmt::format("  {}: its sizes' errors' correlation is not known (not every size paired alike): its "
+                       "variance is the bound over correlations in [0, 1]", t.effect);
   std::vector<std::string> parts;
   for (std::size_t g = 0; g < t.size_correlation.size(); ++g) {
-    const auto first = static_cast<std::size_t>(std::find(t.pooled_in.begin(), t.pooled_in.end(), g) - t.pooled_in.begin());
+    const auto first =
+        static_cast<std::size_t>(std::find(t.pooled_in.begin(), t.pooled_in.end(), g) - t.pooled_in.begin());
     const std::string name = first < data.points.size() ? to_string(data.points[first].observable) : "all";
-    const SizeCorrelation& c = t.size_correlation[g];
-    if (c.points == 0) {
-      parts.push_back(fmt::format("{} none (the bound)", name));
-      continue;
-    }
-    double sum = 0;
-    int n = 0;
-    for (std::size_t j = 0; j + 1 < t.offsets.size(); ++j) {
-      if (t.offsets[j] == 0 || t.offsets[j + 1] == 0) continue;
-      sum += c.matrix(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j + 1)), ++n;
-    }
-    parts.push_back(n > 0 ? fmt::format("{} {:+.2f} ({} points)", name, sum / n, c.points)
-                          : fmt::format("{} n/a (one size)", name));
+    const double c = t.neighbour_correlation(g);
+    const int points = t.size_correlation[g].points;
+    if (t.size_correlation[g].matrix.size() == 0)
+      parts.push_back(fmt::format("{} not counted ({} point(s) pooled, fewer than {}: the bound)", name, points,
+                                  SizeCorrelation::kMinPoints));
+    else if (std::isnan(c))
+      parts.push_back(fmt::format("{} n/a (one size)", name));
+    else
+      parts.push_back(fmt::format("{} {:+.2f} ({} points)", name, c, points));
   }
-  return fmt::format("  {}: its sizes' errors correlate between neighbouring sizes, counted in its variance: {}", t.effect,
-                     fmt::join(parts, ", "));
+  return fmt::format("  {}: its sizes' errors correlate between neighbouring sizes, counted in its variance: {}",
+                     t.effect, fmt::join(parts, ", "));
 }
 
 // The nodes a term measured at `at` pairs its moved runs with: the reference's, when its runs

@@ -68,10 +68,11 @@ SmoothResponse smooth_response(const std::vector<double>& x, std::vector<double>
   return r;
 }
 
-// Where the sizes' correlation is not known (a term whose sizes are not all paired alike; every term
-// in blind passes up to 25): the largest variance of sum_j w_j e_j over the sizes' errors e_j
-// (standard errors s_j) when their correlations lie in [0, 1] (the sizes' shifts share the neutral
-// runs and their seeds, which correlates them positively; a negative correlation is not allowed for): it is linear in each
+// Where the sizes' correlation is not counted (a term whose sizes are not all paired alike, or too few
+// points pooled; every term in blind passes up to 25): the largest variance of sum_j w_j e_j over the
+// sizes' errors e_j (standard errors s_j) when their correlations lie in [0, 1] (the sizes' shifts
+// share the neutral runs and their seeds, which correlates them positively; a negative correlation is
+// not allowed for): it is linear in each
 // correlation, so the largest is at 1 where the two weights agree in sign and 0 where
 // they do not, (sum of w_j s_j over w_j > 0)^2 + (sum of |w_j| s_j over w_j < 0)^2. For a straight
 // line between two sizes this is ((1-w) sa + w sb)^2 (exact next to neutral, where sa = 0), and
@@ -104,19 +105,26 @@ Eigen::MatrixXd standardized_pairs(const EffectTerm& t, std::size_t i, const std
   return standardize_columns(z) ? z : Eigen::MatrixXd{};
 }
 
-// The sizes' correlation per group of points; none (empty) unless every size but neutral has its
-// pairs, the same number at each point.
-std::vector<SizeCorrelation> size_correlations(const EffectTerm& t) {
-  std::vector<std::size_t> sizes;  // those with pairs: every one but neutral
+// The sizes but neutral, when every one has its pairs, the same number at each point; else none.
+std::vector<std::size_t> sizes_paired_alike(const EffectTerm& t) {
+  std::vector<std::size_t> sizes;
   for (std::size_t j = 0; j < t.offsets.size(); ++j) {
     if (t.offsets[j] == 0) continue;
     if (t.pairs[j].size() != t.shift[j].size()) return {};
     sizes.push_back(j);
   }
-  if (sizes.empty()) return {};
-  for (std::size_t i = 0; i < t.shift.front().size(); ++i)
+  for (std::size_t i = 0; !sizes.empty() && i < t.shift.front().size(); ++i)
     for (std::size_t j : sizes)
       if (t.pairs[j][i].size() != t.pairs[sizes.front()][i].size()) return {};
+  return sizes;
+}
+
+// The sizes' correlation per group of points; none (empty) unless every size but neutral is paired
+// alike. Each entry clipped to [0, 1] (the bound's range: the shifts share their partners' noise), so
+// that a group's estimate never states more than the bound, nor less than independent sizes.
+std::vector<SizeCorrelation> size_correlations(const EffectTerm& t) {
+  const std::vector<std::size_t> sizes = sizes_paired_alike(t);
+  if (sizes.empty()) return {};
   const std::size_t groups = t.pooled_in.empty() ? 1 : *std::max_element(t.pooled_in.begin(), t.pooled_in.end()) + 1;
   const auto m = static_cast<Eigen::Index>(sizes.size());
   std::vector<Eigen::MatrixXd> gram(groups, Eigen::MatrixXd::Zero(m, m));
@@ -130,12 +138,14 @@ std::vector<SizeCorrelation> size_correlations(const EffectTerm& t) {
   }
   const auto all = static_cast<Eigen::Index>(t.offsets.size());
   for (std::size_t g = 0; g < groups; ++g) {
-    if (out[g].points == 0) continue;
+    if (out[g].points < SizeCorrelation::kMinPoints) continue;
     out[g].matrix = Eigen::MatrixXd::Identity(all, all);
     for (Eigen::Index a = 0; a < m; ++a)
-      for (Eigen::Index b = 0; b < m; ++b)
-        out[g].matrix(static_cast<Eigen::Index>(sizes[static_cast<std::size_t>(a)]),
-                      static_cast<Eigen::Index>(sizes[static_cast<std::size_t>(b)])) = gram[g](a, b) / out[g].points;
+      for (Eigen::Index b = 0; b < m; ++b) {
+        const auto j = static_cast<Eigen::Index>(sizes[static_cast<std::size_t>(a)]);
+        const auto k = static_cast<Eigen::Index>(sizes[static_cast<std::size_t>(b)]);
+        out[g].matrix(j, k) = std::clamp(gram[g](a, b) / out[g].points, 0.0, 1.0);
+      }
   }
   return out;
 }
@@ -180,6 +190,28 @@ void EffectTerm::add_size(double da, std::vector<double> shift_at, std::vector<d
   }
 }
 
+double EffectTerm::neighbour_correlation(std::size_t group) const {
+  if (group >= size_correlation.size() || size_correlation[group].matrix.size() == 0) return NAN;
+  double sum = 0;
+  int n = 0;
+  for (std::size_t j = 0; j + 1 < offsets.size(); ++j) {
+    if (offsets[j] == 0 || offsets[j + 1] == 0) continue;
+    sum += size_correlation[group].matrix(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j + 1)), ++n;
+  }
+  return n > 0 ? sum / n : NAN;
+}
+
+double EffectTerm::neighbour_correlation() const {
+  double sum = 0;
+  int points = 0;
+  for (std::size_t g = 0; g < size_correlation.size(); ++g) {
+    const double c = neighbour_correlation(g);
+    if (std::isnan(c)) continue;
+    sum += c * size_correlation[g].points, points += size_correlation[g].points;
+  }
+  return points > 0 ? sum / points : NAN;
+}
+
 std::vector<double> EffectTerm::weights(std::size_t i, double da, double& value) const {
   std::vector<double> w(offsets.size(), 0.0);
   const bool inside = da >= offsets.front() && da <= offsets.back();
@@ -211,10 +243,11 @@ double EffectTerm::response(std::size_t i, double da, double& variance, double* 
   double value = 0;
   const std::vector<double> w = weights(i, da, value);
   const std::size_t group = pooled_in.empty() || i >= pooled_in.size() ? 0 : pooled_in[i];
-  if (group < size_correlation.size() && size_correlation[group].points > 0) {
+  if (group < size_correlation.size() && size_correlation[group].matrix.size() > 0) {
     Eigen::VectorXd ws(static_cast<Eigen::Index>(offsets.size()));
     for (std::size_t j = 0; j < offsets.size(); ++j) ws(static_cast<Eigen::Index>(j)) = w[j] * shift_se[j][i];
-    variance = std::max(ws.dot(size_correlation[group].matrix * ws), 0.0);  // a Gram matrix: never below 0 but by rounding
+    // Clipped to [0, 1] the matrix may not be a Gram matrix any more: never below 0.
+    variance = std::max(ws.dot(size_correlation[group].matrix * ws), 0.0);
   } else {
     VarianceBound bound;
     for (std::size_t j = 0; j < offsets.size(); ++j) bound.add(w[j], shift_se[j][i]);

@@ -21,8 +21,12 @@ struct SmoothResponse;
 // minus those runs' noise, and each moved run keeps some of its partner's and its neighbours' (common
 // random numbers). For moved runs that keep nothing of their partners the shifts correlate 1/2.
 struct SizeCorrelation {
-  int points = 0;          // points pooled (0: none could be; the term's variance is then the bound)
-  Eigen::MatrixXd matrix;  // [size][size] over EffectTerm::offsets, unit diagonal (neutral's row the identity's)
+  // Fewest points pooled for the correlation to be counted: from one point's 18 pairs a correlation's
+  // se is about 0.2, which would understate the variance by a fifth at two se's; from 6, about 0.08.
+  static constexpr int kMinPoints = 6;
+  int points = 0;          // points pooled
+  Eigen::MatrixXd matrix;  // [size][size] over EffectTerm::offsets, unit diagonal (neutral's row the
+                           // identity's), each entry within [0, 1]; empty below kMinPoints (the bound)
 };
 
 // An effect term of the surface: the shift of every point's fit-scale value when
@@ -54,7 +58,7 @@ struct EffectTerm {
   // baseline grid nodes, the surface's quadratic goes through the same runs, and the two parts of
   // a prediction share their noise (Surface::predict_fit).
   std::vector<ParameterSet> paired_with;
-  // The paired differences behind each size's shift, [size][point][pair], the pairs in one order at
+  // The paired differences behind each size's shift (fit scale), [size][point][pair], the pairs in one order at
   // every size (node by node, replicate by replicate; NaN where a run is missing); empty at a size
   // measured otherwise (a signature's, and neutral, whose shift is 0 exactly). Where every size but
   // neutral has them, their correlation is counted in the variance (`size_correlation`).
@@ -65,6 +69,11 @@ struct EffectTerm {
   // A term measured at one step: shift = slope * step.
   static EffectTerm single_step(std::string effect, std::string key, double neutral, double lo, double hi, double step,
                                 std::vector<double> slope, std::vector<double> slope_se);
+  // The mean correlation of neighbouring sizes' errors in `group` (neutral left out: its shift is
+  // exact); NaN where not counted, or with one size beside neutral. With no group, the mean over the
+  // groups weighted by their points.
+  double neighbour_correlation(std::size_t group) const;
+  double neighbour_correlation() const;
   // Add the shifts measured at offset `da` (kept sorted), with the paired differences they are the
   // means of where given ([point][pair]); the interpolants and the sizes' correlation are made anew.
   void add_size(double da, std::vector<double> shift_at, std::vector<double> se_at,

@@ -413,6 +413,7 @@ TEST(CalibrationReport, AlternativesNotExcludedAreNamedInTheRoundTheVerdictAndTh
   AddedEffect scatter;
   scatter.effect = "size_scatter", scatter.key = "particles.size_scatter", scatter.value = 0.077;
   scatter.group = {"size_scatter"}, scatter.alternatives = {"rolling_resistance"};
+  scatter.size_correlation = 0.48;
   r.effects.push_back(scatter);
   r.verdict = "effect found; these data do not exclude another effect in its place";
   testing::TempDir dir("gapflow-calibration-report-alternatives");
@@ -442,6 +443,7 @@ TEST(CalibrationReport, AlternativesNotExcludedAreNamedInTheRoundTheVerdictAndTh
       "import json; s = json.load(open('{0}')); "
       "assert s['alternatives'] == 2, s['alternatives']; "
       "assert s['effects'][0]['alternatives'] == ['rolling_resistance'], s['effects']; "
+      "assert s['effects'][0]['size_correlation'] == 0.48, s['effects']; "
       "rd = s['rounds'][0]; assert rd['alternatives'] == ['rolling_resistance'], rd; "
       "assert abs(rd['fits'][2]['fitted_p'] - 0.042) < 1e-12 and rd['fits'][2]['fitted_dof'] == 43, rd['fits']",
       (dir / "summary.json").string());

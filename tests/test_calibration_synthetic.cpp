@@ -282,6 +282,14 @@ TEST(CalibrationSynthetic, ADragFoundAtAFrictionFarFromTheBaselinesIsMeasuredAga
   EXPECT_GT(friction(r.before), 0.375) << "the premise: the baseline's friction two nodes or more from the truth";
   expect_drag_found(run, 4.0, 0.3);
   EXPECT_NE(run.log.find("linear_drag: the fit moved the free parameters"), std::string::npos) << run.log;
+  // Its sizes measured in one batch against the same runs: their correlation is counted (J only:
+  // one group; the model's runs part within a few collisions, so near 1/2, EffectTerm::response).
+  ASSERT_EQ(r.effects.size(), 1u);
+  EXPECT_GE(r.effects[0].size_correlation, 0.0);
+  EXPECT_LE(r.effects[0].size_correlation, 1.0);
+  EXPECT_NE(run.log.find("linear_drag: its sizes' errors correlate between neighbouring sizes, counted"),
+            std::string::npos)
+      << run.log;
   // The drag planted is the catalogue's: one size fits every incline and gap, and the form check
   // (form_check.hpp) says so.
   ASSERT_FALSE(r.form_checks.empty());
