@@ -41,6 +41,22 @@ std::vector<double> paired_differences(const std::vector<Prediction>& moved, std
   return without_missing(aligned_differences(moved, first, at, i, per));
 }
 
+// Per point, the reference's runs less the mean of their node's, in the pairs' order (aligned_differences):
+// the partners of every size's moved runs (EffectTerm::partners).
+std::vector<std::vector<double>> centred_partners(const Reference& at, std::size_t points) {
+  std::vector<std::vector<double>> out(points);
+  for (std::size_t i = 0; i < points; ++i)
+    for (std::size_t n = 0; n < at.nodes.size(); ++n) {
+      const std::vector<double>& runs = at.predictions[n].replicate_fit[i];
+      double sum = 0;
+      int finite = 0;
+      for (double v : runs)
+        if (std::isfinite(v)) sum += v, ++finite;
+      for (double v : runs) out[i].push_back(std::isfinite(v) ? v - sum / finite : NAN);
+    }
+  return out;
+}
+
 // Per data point, its observable's index in the order they first appear: the groups a term's sizes'
 // correlation is pooled over (as the nodes' is, node_correlation.hpp).
 std::vector<std::size_t> observable_groups(const DataFile& data) {
@@ -54,8 +70,18 @@ std::vector<std::size_t> observable_groups(const DataFile& data) {
   return out;
 }
 
+// A group's partner share (SizeCorrelation::partner_share), its mean over the sizes, as log text.
+std::string partner_share_text(const EffectTerm& t, const SizeCorrelation& c) {
+  if (c.partner_share.empty()) return "partner share -1/2 (not read)";
+  double sum = 0;
+  int n = 0;
+  for (std::size_t j = 0; j < t.offsets.size(); ++j)
+    if (t.offsets[j] != 0) sum += c.partner_share[j], ++n;
+  return fmt::format("partner share {:+.2f}", sum / n);
+}
+
 // One log line: per observable, the mean correlation of the errors of neighbouring sizes' shifts
-// (neutral's excluded: its shift is exact), or that the bound is used.
+// (neutral's excluded: its shift is exact) and the partner share, or that the bound is used.
 std::string size_correlation_text(const EffectTerm& t, const DataFile& data) {
   if (t.size_correlation.empty())
     return fmt::format("  {}: its sizes' errors' correlation is not known (not every size paired alike): its "
@@ -71,9 +97,10 @@ std::string size_correlation_text(const EffectTerm& t, const DataFile& data) {
       parts.push_back(fmt::format("{} not counted ({} point(s) pooled, fewer than {}: the bound)", name, points,
                                   SizeCorrelation::kMinPoints));
     else if (std::isnan(c))
-      parts.push_back(fmt::format("{} n/a (one size)", name));
+      parts.push_back(fmt::format("{} n/a (one size; {})", name, partner_share_text(t, t.size_correlation[g])));
     else
-      parts.push_back(fmt::format("{} {:+.2f} ({} points)", name, c, points));
+      parts.push_back(
+          fmt::format("{} {:+.2f} ({} points; {})", name, c, points, partner_share_text(t, t.size_correlation[g])));
   }
   return fmt::format("  {}: its sizes' errors correlate between neighbouring sizes, counted in its variance: {}",
                      t.effect, fmt::join(parts, ", "));
@@ -367,6 +394,7 @@ void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std:
                    term.offsets.size() > 1 ? "more " : "", fmt::join(offsets, ", "), at.nodes.size()));
   const std::vector<Prediction> moved = evaluate_at(at, sets);
   term.pooled_in = observable_groups(data_);
+  term.partners = centred_partners(at, data_.points.size());
   for (std::size_t k = 0; k < offsets.size(); ++k) {
     std::vector<double> shift, se;
     std::vector<std::vector<double>> pairs;

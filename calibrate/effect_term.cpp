@@ -119,6 +119,49 @@ std::vector<std::size_t> sizes_paired_alike(const EffectTerm& t) {
   return sizes;
 }
 
+// Point i's partner share at size j: sum of partner x difference over the within-node degrees of
+// freedom, against the differences' sample variance; NaN without 3 complete pairs or any spread.
+double partner_share_at(const EffectTerm& t, std::size_t i, std::size_t j) {
+  const std::vector<double>& b = t.partners[i];
+  const std::vector<double>& d = t.pairs[j][i];
+  double n = 0, sum = 0;
+  for (std::size_t r = 0; r < d.size(); ++r)
+    if (std::isfinite(b[r]) && std::isfinite(d[r])) sum += d[r], ++n;
+  const double nodes = static_cast<double>(std::max<std::size_t>(t.paired_with.size(), 1));
+  if (n < nodes + 2) return NAN;
+  const double mean = sum / n;
+  double cross = 0, squares = 0;
+  for (std::size_t r = 0; r < d.size(); ++r)
+    if (std::isfinite(b[r]) && std::isfinite(d[r])) cross += b[r] * (d[r] - mean), squares += (d[r] - mean) * (d[r] - mean);
+  if (!(squares > 0)) return NAN;
+  return (cross / (n - nodes)) / (squares / (n - 1));  // the partners are centred per node
+}
+
+// Each group's partner share per size, the mean over its points that have one (where the partners are
+// known and at least kMinPoints of the group's points give one at every size; else left empty).
+void add_partner_shares(const EffectTerm& t, const std::vector<std::size_t>& sizes, std::vector<SizeCorrelation>& out) {
+  const std::size_t points = t.shift.front().size();
+  if (t.partners.size() != points) return;
+  for (std::size_t i = 0; i < points; ++i)
+    if (t.partners[i].size() != t.pairs[sizes.front()][i].size()) return;
+  for (std::size_t g = 0; g < out.size(); ++g) {
+    std::vector<double> sum(t.offsets.size(), 0.0);
+    int pooled = 0;
+    for (std::size_t i = 0; i < points; ++i) {
+      if ((t.pooled_in.empty() ? 0 : t.pooled_in[i]) != g) continue;
+      std::vector<double> at(t.offsets.size(), 0.0);
+      bool every = true;
+      for (std::size_t j : sizes) every = every && std::isfinite(at[j] = partner_share_at(t, i, j));
+      if (!every) continue;
+      for (std::size_t j : sizes) sum[j] += at[j];
+      ++pooled;
+    }
+    if (pooled < SizeCorrelation::kMinPoints) continue;
+    out[g].partner_share.assign(t.offsets.size(), -0.5);
+    for (std::size_t j : sizes) out[g].partner_share[j] = std::clamp(sum[j] / pooled, -1.0, 1.0);
+  }
+}
+
 // The sizes' correlation per group of points; none (empty) unless every size but neutral is paired
 // alike. Each entry clipped to [0, 1] (the bound's range: the shifts share their partners' noise), so
 // that a group's estimate never states more than the bound, nor less than independent sizes.
@@ -147,6 +190,7 @@ std::vector<SizeCorrelation> size_correlations(const EffectTerm& t) {
         out[g].matrix(j, k) = std::clamp(gram[g](a, b) / out[g].points, 0.0, 1.0);
       }
   }
+  add_partner_shares(t, sizes, out);
   return out;
 }
 
@@ -231,12 +275,15 @@ std::vector<double> EffectTerm::weights(std::size_t i, double da, double& value)
 }
 
 // The paired covariance: each size's shift at point i is the mean, over N replicate pairs at the
-// paired nodes (R at each), of d = m - b: a moved run less the node's run on the same seed. With m
-// and b of equal variance s^2 and correlation rho (common random numbers keep the packing, not the
-// trajectory: rho is neither 0 nor 1), Cov(b, d) = rho s^2 - s^2 = -Var(d)/2, whatever rho. A node's
+// paired nodes (R at each), of d = m - b: a moved run less the node's run on the same seed. A node's
 // fit value is the mean of its R runs, so its covariance with the shift is R (1/R) (1/N) Cov(b, d) =
-// -Var(d)/(2N), that is -shift_se^2/2, at every paired node alike. The interpolant is linear in the
-// shifts.
+// c Var(d)/N = c shift_se^2, at every paired node alike, with c = Cov(b, d)/Var(d) the partner share.
+// With m and b of equal variance s^2 and correlation rho (common random numbers keep the packing, not
+// the trajectory: rho is neither 0 nor 1), Cov(b, d) = rho s^2 - s^2 = -Var(d)/2 whatever rho: c = -1/2,
+// what every pass up to 25 used. An effect that changes the noise breaks it: moved runs with 1.5 times
+// their partners' sd (rho 0) give c = -1/3.25, and -1/2 then stated less than half the prediction's
+// variance (tests/test_surface_noise.cpp); so c is read off the partners where they are known
+// (SizeCorrelation::partner_share). The interpolant is linear in the shifts.
 double EffectTerm::response(std::size_t i, double da, double& variance, double* paired_covariance) const {
   if (paired_covariance) *paired_covariance = 0;
   if (offsets.size() < 2) return variance = 0, 0.0;
@@ -253,8 +300,13 @@ double EffectTerm::response(std::size_t i, double da, double& variance, double* 
     for (std::size_t j = 0; j < offsets.size(); ++j) bound.add(w[j], shift_se[j][i]);
     variance = bound.value();
   }
-  if (paired_covariance && !paired_with.empty())
-    for (std::size_t j = 0; j < offsets.size(); ++j) *paired_covariance -= w[j] * shift_se[j][i] * shift_se[j][i] / 2;
+  if (paired_covariance && !paired_with.empty()) {
+    const std::vector<double>* share =
+        group < size_correlation.size() && !size_correlation[group].partner_share.empty() ? &size_correlation[group].partner_share
+                                                                                           : nullptr;
+    for (std::size_t j = 0; j < offsets.size(); ++j)
+      *paired_covariance += w[j] * (share ? (*share)[j] : -0.5) * shift_se[j][i] * shift_se[j][i];
+  }
   return value;
 }
 

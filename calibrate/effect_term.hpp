@@ -27,6 +27,11 @@ struct SizeCorrelation {
   int points = 0;          // points pooled
   Eigen::MatrixXd matrix;  // [size][size] over EffectTerm::offsets, unit diagonal (neutral's row the
                            // identity's), each entry within [0, 1]; empty below kMinPoints (the bound)
+  // [size] over EffectTerm::offsets: the covariance of a partner (an unmoved run) with its pair's
+  // difference over that difference's variance, pooled like the matrix. -1/2 whatever the moved runs
+  // keep of their partners, where they vary as much as their partners do; toward -1 where they vary
+  // less, toward 0 where more. Empty where the partners are not known or too few points pooled (-1/2).
+  std::vector<double> partner_share;
 };
 
 // An effect term of the surface: the shift of every point's fit-scale value when
@@ -64,6 +69,9 @@ struct EffectTerm {
   // neutral has them, their correlation is counted in the variance (`size_correlation`).
   std::vector<std::vector<std::vector<double>>> pairs;
   std::vector<std::size_t> pooled_in;  // per point: the group whose points the correlation pools (empty: one group)
+  // [point][pair]: each pair's unmoved run less the mean of its node's (fit scale), in the pairs' order,
+  // over the paired_with nodes; empty where not known. For SizeCorrelation::partner_share.
+  std::vector<std::vector<double>> partners;
   std::vector<SizeCorrelation> size_correlation;  // [group]; empty where not every size has its pairs
 
   // A term measured at one step: shift = slope * step.
@@ -89,9 +97,9 @@ struct EffectTerm {
   // (blind passes up to 20) the two neighbours' standard errors were interpolated linearly, which
   // understated the cubic's by 14 % at 3 deg on the tilt's quadratic.
   // With `paired_covariance`, also the covariance of that shift with the mean of one paired node's
-  // runs at point i (each such node alike; 0 without paired nodes): -(sum_j w_j shift_se_j^2) / 2
-  // over the same weights w_j (derived in effect_term.cpp). Negative: a node's runs enter the shift
-  // with a minus sign.
+  // runs at point i (each such node alike; 0 without paired nodes): sum_j w_j c_j shift_se_j^2 over
+  // the same weights w_j, c_j the size's partner share (SizeCorrelation), -1/2 where not known
+  // (derived in effect_term.cpp). Negative: a node's runs enter the shift with a minus sign.
   double response(std::size_t i, double da, double& variance, double* paired_covariance = nullptr) const;
 
  private:

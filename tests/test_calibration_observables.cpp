@@ -351,6 +351,7 @@ TEST(EffectTermResponse, TheSizesCorrelationIsCountedOnlyWherePairedAlikeAndPool
   ASSERT_EQ(t.size_correlation[0].matrix.rows(), 3);
   EXPECT_EQ(t.size_correlation[0].matrix(1, 2), 0.0);  // -1, clipped
   EXPECT_EQ(t.size_correlation[0].matrix(0, 1), 0.0);  // neutral's row: the identity's
+  EXPECT_TRUE(t.size_correlation[0].partner_share.empty());  // no partners given: -1/2
   EXPECT_EQ(t.size_correlation[1].points, 2);
   EXPECT_EQ(t.size_correlation[1].matrix.size(), 0);  // fewer than kMinPoints: not counted
   double counted = 0, uncounted = 0;
