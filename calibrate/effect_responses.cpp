@@ -41,19 +41,13 @@ std::vector<double> paired_differences(const std::vector<Prediction>& moved, std
   return without_missing(aligned_differences(moved, first, at, i, per));
 }
 
-// Per point, the reference's runs less the mean of their node's, in the pairs' order (aligned_differences):
-// the partners of every size's moved runs (EffectTerm::partners).
-std::vector<std::vector<double>> centred_partners(const Reference& at, std::size_t points) {
+// Per point, the reference's runs in the pairs' order (aligned_differences): the partners of every
+// size's moved runs (EffectTerm::partners).
+std::vector<std::vector<double>> partner_runs(const Reference& at, std::size_t points) {
   std::vector<std::vector<double>> out(points);
   for (std::size_t i = 0; i < points; ++i)
-    for (std::size_t n = 0; n < at.nodes.size(); ++n) {
-      const std::vector<double>& runs = at.predictions[n].replicate_fit[i];
-      double sum = 0;
-      int finite = 0;
-      for (double v : runs)
-        if (std::isfinite(v)) sum += v, ++finite;
-      for (double v : runs) out[i].push_back(std::isfinite(v) ? v - sum / finite : NAN);
-    }
+    for (std::size_t n = 0; n < at.nodes.size(); ++n)
+      for (double v : at.predictions[n].replicate_fit[i]) out[i].push_back(v);
   return out;
 }
 
@@ -92,15 +86,13 @@ std::string size_correlation_text(const EffectTerm& t, const DataFile& data) {
         static_cast<std::size_t>(std::find(t.pooled_in.begin(), t.pooled_in.end(), g) - t.pooled_in.begin());
     const std::string name = first < data.points.size() ? to_string(data.points[first].observable) : "all";
     const double c = t.neighbour_correlation(g);
-    const int points = t.size_correlation[g].points;
-    if (t.size_correlation[g].matrix.size() == 0)
-      parts.push_back(fmt::format("{} not counted ({} point(s) pooled, fewer than {}: the bound)", name, points,
-                                  SizeCorrelation::kMinPoints));
-    else if (std::isnan(c))
-      parts.push_back(fmt::format("{} n/a (one size; {})", name, partner_share_text(t, t.size_correlation[g])));
-    else
-      parts.push_back(
-          fmt::format("{} {:+.2f} ({} points; {})", name, c, points, partner_share_text(t, t.size_correlation[g])));
+    const SizeCorrelation& sc = t.size_correlation[g];
+    const std::string correlation =
+        sc.matrix.size() == 0 ? fmt::format("not counted ({} point(s) pooled, fewer than {}: the bound)", sc.points,
+                                            SizeCorrelation::kMinPoints)
+        : std::isnan(c)       ? std::string("n/a (one size)")
+                              : fmt::format("{:+.2f} ({} points)", c, sc.points);
+    parts.push_back(fmt::format("{} {}; {}", name, correlation, partner_share_text(t, sc)));
   }
   return fmt::format("  {}: its sizes' errors correlate between neighbouring sizes, counted in its variance: {}",
                      t.effect, fmt::join(parts, ", "));
@@ -394,7 +386,7 @@ void EffectResponses::add_sizes(EffectTerm& term, const Candidate& c, const std:
                    term.offsets.size() > 1 ? "more " : "", fmt::join(offsets, ", "), at.nodes.size()));
   const std::vector<Prediction> moved = evaluate_at(at, sets);
   term.pooled_in = observable_groups(data_);
-  term.partners = centred_partners(at, data_.points.size());
+  if (!paired_nodes(at).empty()) term.partners = partner_runs(at, data_.points.size());
   for (std::size_t k = 0; k < offsets.size(); ++k) {
     std::vector<double> shift, se;
     std::vector<std::vector<double>> pairs;

@@ -119,46 +119,66 @@ std::vector<std::size_t> sizes_paired_alike(const EffectTerm& t) {
   return sizes;
 }
 
-// Point i's partner share at size j: sum of partner x difference over the within-node degrees of
-// freedom, against the differences' sample variance; NaN without 3 complete pairs or any spread.
-double partner_share_at(const EffectTerm& t, std::size_t i, std::size_t j) {
+// Point i's moments behind the partner share at size j, over the pairs whose partner and difference
+// are both known: the partners' within-node covariance with the differences, as a sum over the
+// within-node degrees of freedom (each node's partners centred over those pairs), and the
+// differences' sum of squares over theirs. The pairs run node by node, the same number at each
+// (EffectTerm::partners). Both 0 where the pairs do not split evenly over the nodes or leave fewer
+// than two degrees of freedom.
+struct ShareMoments {
+  double covariance = 0, variance = 0;  // fit scale squared: Cov(b, d) and Var(d) estimates
+};
+ShareMoments share_moments(const EffectTerm& t, std::size_t i, std::size_t j) {
   const std::vector<double>& b = t.partners[i];
   const std::vector<double>& d = t.pairs[j][i];
-  double n = 0, sum = 0;
-  for (std::size_t r = 0; r < d.size(); ++r)
-    if (std::isfinite(b[r]) && std::isfinite(d[r])) sum += d[r], ++n;
-  const double nodes = static_cast<double>(std::max<std::size_t>(t.paired_with.size(), 1));
-  if (n < nodes + 2) return NAN;
-  const double mean = sum / n;
-  double cross = 0, squares = 0;
-  for (std::size_t r = 0; r < d.size(); ++r)
-    if (std::isfinite(b[r]) && std::isfinite(d[r])) cross += b[r] * (d[r] - mean), squares += (d[r] - mean) * (d[r] - mean);
-  if (!(squares > 0)) return NAN;
-  return (cross / (n - nodes)) / (squares / (n - 1));  // the partners are centred per node
+  const std::size_t nodes = std::max<std::size_t>(t.paired_with.size(), 1);
+  if (d.size() % nodes != 0) return {};
+  const std::size_t per_node = d.size() / nodes;
+  double cross = 0, n = 0, sum = 0, squares = 0;
+  std::size_t used_nodes = 0;
+  for (std::size_t k = 0; k < nodes; ++k) {
+    double nk = 0, bk = 0, dk = 0;
+    for (std::size_t r = k * per_node; r < (k + 1) * per_node; ++r)
+      if (std::isfinite(b[r]) && std::isfinite(d[r])) bk += b[r], dk += d[r], ++nk;
+    if (nk == 0) continue;
+    ++used_nodes;
+    for (std::size_t r = k * per_node; r < (k + 1) * per_node; ++r) {
+      if (!std::isfinite(b[r]) || !std::isfinite(d[r])) continue;
+      cross += (b[r] - bk / nk) * d[r], sum += d[r], squares += d[r] * d[r];
+    }
+    n += nk;
+  }
+  if (n < static_cast<double>(used_nodes) + 2) return {};
+  return {cross / (n - static_cast<double>(used_nodes)), (squares - sum * sum / n) / (n - 1)};
 }
 
-// Each group's partner share per size, the mean over its points that have one (where the partners are
-// known and at least kMinPoints of the group's points give one at every size; else left empty).
+// Each group's partner share per size: the partners' covariance with the differences over the
+// differences' variance, each summed over the group's points (a ratio of sums, so that a point the
+// effect hardly moves, whose differences hardly vary, cannot swing it), where the partners are known
+// and at least kMinPoints of the group's points have differences that vary at every size; else
+// left empty (-1/2).
 void add_partner_shares(const EffectTerm& t, const std::vector<std::size_t>& sizes, std::vector<SizeCorrelation>& out) {
   const std::size_t points = t.shift.front().size();
   if (t.partners.size() != points) return;
   for (std::size_t i = 0; i < points; ++i)
     if (t.partners[i].size() != t.pairs[sizes.front()][i].size()) return;
   for (std::size_t g = 0; g < out.size(); ++g) {
-    std::vector<double> sum(t.offsets.size(), 0.0);
+    std::vector<ShareMoments> sum(t.offsets.size());
     int pooled = 0;
     for (std::size_t i = 0; i < points; ++i) {
       if ((t.pooled_in.empty() ? 0 : t.pooled_in[i]) != g) continue;
-      std::vector<double> at(t.offsets.size(), 0.0);
+      std::vector<ShareMoments> at(t.offsets.size());
       bool every = true;
-      for (std::size_t j : sizes) every = every && std::isfinite(at[j] = partner_share_at(t, i, j));
+      for (std::size_t j : sizes) every = every && (at[j] = share_moments(t, i, j)).variance > 0;
       if (!every) continue;
-      for (std::size_t j : sizes) sum[j] += at[j];
+      for (std::size_t j : sizes) sum[j].covariance += at[j].covariance, sum[j].variance += at[j].variance;
       ++pooled;
     }
     if (pooled < SizeCorrelation::kMinPoints) continue;
     out[g].partner_share.assign(t.offsets.size(), -0.5);
-    for (std::size_t j : sizes) out[g].partner_share[j] = std::clamp(sum[j] / pooled, -1.0, 1.0);
+    for (std::size_t j : sizes)  // held within [-1, 1]: below -1 (moved runs that keep much of a noisier partner) the
+                                 // larger covariance is not counted, which errs toward a larger variance
+      out[g].partner_share[j] = std::clamp(sum[j].covariance / sum[j].variance, -1.0, 1.0);
   }
 }
 
@@ -301,9 +321,8 @@ double EffectTerm::response(std::size_t i, double da, double& variance, double* 
     variance = bound.value();
   }
   if (paired_covariance && !paired_with.empty()) {
-    const std::vector<double>* share =
-        group < size_correlation.size() && !size_correlation[group].partner_share.empty() ? &size_correlation[group].partner_share
-                                                                                           : nullptr;
+    const bool read = group < size_correlation.size() && !size_correlation[group].partner_share.empty();
+    const std::vector<double>* share = read ? &size_correlation[group].partner_share : nullptr;
     for (std::size_t j = 0; j < offsets.size(); ++j)
       *paired_covariance += w[j] * (share ? (*share)[j] : -0.5) * shift_se[j][i] * shift_se[j][i];
   }

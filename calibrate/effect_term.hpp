@@ -28,9 +28,10 @@ struct SizeCorrelation {
   Eigen::MatrixXd matrix;  // [size][size] over EffectTerm::offsets, unit diagonal (neutral's row the
                            // identity's), each entry within [0, 1]; empty below kMinPoints (the bound)
   // [size] over EffectTerm::offsets: the covariance of a partner (an unmoved run) with its pair's
-  // difference over that difference's variance, pooled like the matrix. -1/2 whatever the moved runs
-  // keep of their partners, where they vary as much as their partners do; toward -1 where they vary
-  // less, toward 0 where more. Empty where the partners are not known or too few points pooled (-1/2).
+  // difference over that difference's variance, pooled over the group's points. -1/2 whatever the
+  // moved runs keep of their partners where they vary as much as their partners do; more negative
+  // where they vary less (below -1 where they keep much of a noisier partner: held at -1), toward 0
+  // where more. Empty where the partners are not known or too few points pooled (-1/2 then).
   std::vector<double> partner_share;
 };
 
@@ -69,8 +70,9 @@ struct EffectTerm {
   // neutral has them, their correlation is counted in the variance (`size_correlation`).
   std::vector<std::vector<std::vector<double>>> pairs;
   std::vector<std::size_t> pooled_in;  // per point: the group whose points the correlation pools (empty: one group)
-  // [point][pair]: each pair's unmoved run less the mean of its node's (fit scale), in the pairs' order,
-  // over the paired_with nodes; empty where not known. For SizeCorrelation::partner_share.
+  // [point][pair]: each pair's unmoved run (fit scale, NaN where missing), in the pairs' order, node
+  // by node over the paired_with nodes, the same number at each; empty where not known (a term on
+  // seeds of its own pairs with no surface node). For SizeCorrelation::partner_share.
   std::vector<std::vector<double>> partners;
   std::vector<SizeCorrelation> size_correlation;  // [group]; empty where not every size has its pairs
 

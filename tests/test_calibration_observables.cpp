@@ -370,6 +370,42 @@ TEST(EffectTermResponse, TheSizesCorrelationIsCountedOnlyWherePairedAlikeAndPool
   EXPECT_TRUE(t.size_correlation.empty());
 }
 
+TEST(EffectTermResponse, ThePartnerShareIsARatioOfSumsOverThePointsWithinEachNode) {
+  // 3 nodes of 4 pairs: partners b = (1, -1, 1, -1) at each node plus the node's own level, and
+  // differences d = -b/2 + e, e = s (1, 1, -1, -1) orthogonal to b within each node, s^2 = 35/36: the
+  // within-node covariance -2/3, the differences' variance 4/3, a share of -1/2 at every point. A
+  // seventh point the effect hardly moves, d = -0.003 (b - its node's level): its own ratio is -407,
+  // which a mean of ratios would pull to -59 (held at -1); summed, it moves the share by 0.0005.
+  const double s = std::sqrt(35.0) / 6;
+  const std::vector<double> pattern_b{1, -1, 1, -1}, pattern_e{s, s, -s, -s};
+  std::vector<std::vector<double>> partners, pairs;
+  for (std::size_t i = 0; i < 7; ++i) {
+    partners.emplace_back(), pairs.emplace_back();
+    for (int node = 0; node < 3; ++node)
+      for (std::size_t r = 0; r < 4; ++r) {
+        partners.back().push_back(10.0 * node + pattern_b[r]);  // the node's level drops out
+        pairs.back().push_back(i < 6 ? -pattern_b[r] / 2 + pattern_e[r] : -0.003 * pattern_b[r]);
+      }
+  }
+  EffectTerm t;
+  t.offsets = {0.0}, t.shift = {std::vector<double>(7, 0.0)}, t.shift_se = t.shift;
+  t.paired_with = {ParameterSet{}, ParameterSet{}, ParameterSet{}};  // three nodes
+  t.partners = partners;
+  t.add_size(1.0, std::vector<double>(7, 0.1), std::vector<double>(7, 0.01), pairs);
+  ASSERT_EQ(t.size_correlation.size(), 1u);
+  ASSERT_EQ(t.size_correlation[0].partner_share.size(), 2u);
+  EXPECT_NEAR(t.size_correlation[0].partner_share[1], -0.5, 0.001);
+  // A missing partner leaves its pair out, and its node's other partners are centred without it.
+  partners[0][0] = std::nan("");
+  t.partners = partners;
+  t.add_size(1.0, std::vector<double>(7, 0.1), std::vector<double>(7, 0.01), pairs);
+  EXPECT_NEAR(t.size_correlation[0].partner_share[1], -0.5, 0.05);
+  // Pairs that do not split evenly over the nodes (12 over 5): no share (-1/2 used).
+  t.paired_with.resize(5);
+  t.add_size(1.0, std::vector<double>(7, 0.1), std::vector<double>(7, 0.01), pairs);
+  EXPECT_TRUE(t.size_correlation[0].partner_share.empty());
+}
+
 // kFourPoints with an evaluator on a store of its own, 2 workers (members in that order:
 // the evaluator keeps references to the data file and the store).
 struct FourPointEvaluator {
