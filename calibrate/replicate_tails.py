@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """How far from normal a point's replicates are: per study point and observable (on the loop's fit scales,
-calibrate/grid_runs.py), the runs' skewness and excess kurtosis, the largest |z|, and what that kurtosis does to
-the variance a point's 6 runs estimate. The loop reads every point's noise off 6 runs (design v2); with excess
-kurtosis k their sample variance scatters 1 + 5k/12 times as much as a normal sample's (Var s^2 = sigma^4 (2/5 + k/6)
-for 6 runs), and a chi^2 over such estimated variances runs above its expectation.
+calibrate/grid_runs.py), the runs' skewness and excess kurtosis (moments about the mean in population form; the
+sd with n - 1), the largest |z|, and what that kurtosis does to the variance a point's 6 runs estimate. The loop
+reads every point's noise off 6 runs (design v2); with excess kurtosis k the variance of their sample variance is
+1 + 5k/12 times a normal sample's (Var s^2 = sigma^4 (2/5 + k/6) for 6 runs; its spread the square root of that),
+and a chi^2 over such estimated variances runs above its expectation.
 
     calibrate/replicate_tails.py STORE        (a study's store, e.g. studies/noise/replicate_tails.toml's)
 
@@ -49,7 +50,7 @@ def main():
         for o, v in observables(*measured).items():
             values[o].append(v)
     print("| series | point | observable | runs | sd (fit scale) | skewness | excess kurtosis (se) | largest abs z "
-          "| 6 runs' variance scatter (normal 1) |")
+          "| Var of a 6-run variance (normal 1) |")
     print("| :-- | :-- | :-- | --: | --: | --: | --: | --: | --: |")
     for (series, _, label), values in sorted(points.items()):
         for o in OBSERVABLES:

@@ -1048,17 +1048,17 @@ class GridRuns(unittest.TestCase):
 class ReplicateTails(unittest.TestCase):
     """calibrate/replicate_tails.py on a fake study store with known moments."""
 
-    def test_a_two_valued_sample_has_no_skew_and_an_excess_kurtosis_of_minus_two(self):
+    def test_an_asymmetric_samples_moments(self):
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp, "runs.sqlite")
             db = sqlite3.connect(path)
             db.execute("create table runs (job_key text, series text, point integer, point_label text, "
                        "replicate integer, j_mid real)")
             db.execute("create table crossings (job_key text, id integer, t_s real, x_m real)")
-            # ln J_mid and the exit offset (mm) at -1, -1, +1, +1; every crossing at t = 2 s (no spread: no row).
-            for r, sign in enumerate((-1, -1, 1, 1)):
-                db.execute("insert into runs values (?, 's', 0, 'gap=1', ?, ?)", (f"k{r}", r, math.exp(sign)))
-                db.execute("insert into crossings values (?, 0, 2.0, ?)", (f"k{r}", sign * 1e-3))
+            # ln J_mid and the exit offset (mm) at 0, 0, 0, 4; every crossing at t = 2 s (no spread: no row).
+            for r, v in enumerate((0, 0, 0, 4)):
+                db.execute("insert into runs values (?, 's', 0, 'gap=1', ?, ?)", (f"k{r}", r, math.exp(v)))
+                db.execute("insert into crossings values (?, 0, 2.0, ?)", (f"k{r}", v * 1e-3))
             db.commit()
             db.close()
             code, out, err = run("replicate_tails.py", path)
@@ -1066,8 +1066,9 @@ class ReplicateTails(unittest.TestCase):
             rows = [line.split(" | ") for line in out.splitlines()[2:]]
             self.assertEqual([row[2] for row in rows], ["j_mid", "exit_offset"])
             for row in rows:
-                # sd sqrt(4/3); skew 0; excess kurtosis 1 - 3 = -2 (se sqrt(24/4)); |z| 1; scatter 1 - 10/12
-                self.assertEqual(row[3:], ["4", "1.1547", "+0.00", "-2.00 (2.45)", "1.00", "0.17 |"])
+                # Deviations -1, -1, -1, 3: m2 3, m3 6, m4 21. sd sqrt(12/3) = 2; skew 6/3^1.5; excess kurtosis
+                # 21/9 - 3 = -2/3 (a normal sample's se sqrt(24/4)); |z| 3/sqrt(3); 1 + 5 (-2/3)/12 = 0.72
+                self.assertEqual(row[3:], ["4", "2.0000", "+1.15", "-0.67 (2.45)", "1.73", "0.72 |"])
         self.assertEqual(run("replicate_tails.py", "/nonexistent")[0], 2)
 
 
