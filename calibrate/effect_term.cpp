@@ -137,9 +137,9 @@ ShareMoments share_moments(const EffectTerm& t, std::size_t i, std::size_t j) {
   double cross = 0, n = 0, sum = 0, squares = 0;
   std::size_t used_nodes = 0;
   for (std::size_t k = 0; k < nodes; ++k) {
-    double nk = 0, bk = 0, dk = 0;
+    double nk = 0, bk = 0;
     for (std::size_t r = k * per_node; r < (k + 1) * per_node; ++r)
-      if (std::isfinite(b[r]) && std::isfinite(d[r])) bk += b[r], dk += d[r], ++nk;
+      if (std::isfinite(b[r]) && std::isfinite(d[r])) bk += b[r], ++nk;
     if (nk == 0) continue;
     ++used_nodes;
     for (std::size_t r = k * per_node; r < (k + 1) * per_node; ++r) {
