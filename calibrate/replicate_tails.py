@@ -26,6 +26,18 @@ _RUNS = """select r.series, r.point, r.point_label,
            from runs r order by r.series, r.point, r.replicate"""
 
 
+def cells(store):
+    """{(series, point, label): {observable: [fit-scale value per run]}} of a study's store, runs in replicate order."""
+    db = sqlite3.connect(f"file:{store}?mode=ro", uri=True)
+    points = {}
+    for series, point, label, *measured in db.execute(_RUNS):
+        values = points.setdefault((series, point, label), {o: [] for o in OBSERVABLES})
+        for o, v in observables(*measured).items():
+            values[o].append(v)
+    db.close()
+    return points
+
+
 def moments(xs):
     """(sd, skewness, excess kurtosis, largest |z|) of a sample, its moments about the mean (population form)."""
     n = len(xs)
@@ -43,12 +55,7 @@ def main():
     if len(sys.argv) != 2 or not Path(sys.argv[1]).is_file():
         print(__doc__, file=sys.stderr)
         sys.exit(2)
-    db = sqlite3.connect(f"file:{sys.argv[1]}?mode=ro", uri=True)
-    points = {}
-    for series, point, label, *measured in db.execute(_RUNS):
-        values = points.setdefault((series, point, label), {o: [] for o in OBSERVABLES})
-        for o, v in observables(*measured).items():
-            values[o].append(v)
+    points = cells(sys.argv[1])
     print("| series | point | observable | runs | sd (fit scale) | skewness | excess kurtosis (se) | largest abs z "
           "| Var of a 6-run variance (normal 1) |")
     print("| :-- | :-- | :-- | --: | --: | --: | --: | --: | --: |")

@@ -1072,6 +1072,73 @@ class ReplicateTails(unittest.TestCase):
         self.assertEqual(run("replicate_tails.py", "/nonexistent")[0], 2)
 
 
+class TailsChi2(unittest.TestCase):
+    """calibrate/tails_chi2.py: the loop's chi^2 and the fresh disagreement on resampled runs, against normal samples."""
+
+    def store(self, tmp, samples):
+        path = Path(tmp, "runs.sqlite")
+        db = sqlite3.connect(path)
+        db.execute("create table runs (job_key text, series text, point integer, point_label text, "
+                   "replicate integer, j_mid real)")
+        db.execute("create table crossings (job_key text, id integer, t_s real, x_m real)")
+        for point, values in enumerate(samples):
+            for r, v in enumerate(values):
+                db.execute("insert into runs values (?, 's', ?, ?, ?, ?)",
+                           (f"k{point}-{r}", point, f"gap={point}", r, math.exp(v)))
+        db.commit()
+        db.close()
+        return path
+
+    def test_a_jammed_mixture_raises_the_disagreement_and_a_normal_sample_does_not(self):
+        normal = [statistics.NormalDist().inv_cdf((i + 0.5) / 150) for i in range(150)]
+        jammed = [0.1 * x for x in normal[:135]] + [-3.0] * 15     # 10 % of the runs far below (jams)
+        with tempfile.TemporaryDirectory() as tmp:
+            code, out, err = run("tails_chi2.py", self.store(tmp, [normal, jammed]), "--draws", "2000")
+            self.assertEqual(code, 0, err)
+            rows = [line.split(" | ") for line in out.splitlines() if line.startswith("| s |")]
+            self.assertEqual(len(rows), 2)
+
+            def tails(row, column):   # "mean (normal) +x ± se" -> x
+                return float(row[3 + column].split(") ")[1].split(" ± ")[0])
+            # Columns: chi2 own, disagreement own, chi2 pooled, disagreement pooled.
+            for column in range(4):   # the draws' se about 0.035-0.045: within about 3 of them
+                self.assertLess(abs(tails(rows[0], column)), 0.12, rows[0])
+            self.assertGreater(tails(rows[1], 1), 0.3, rows[1])
+            self.assertGreater(tails(rows[1], 3), 0.3, rows[1])
+        self.assertEqual(run("tails_chi2.py", "/nonexistent")[0], 2)
+
+
+class NullPValues(unittest.TestCase):
+    """calibrate/null_p_values.py: the null twins' p-values and per-observable residuals, counted."""
+
+    def test_counts_the_low_p_values_and_the_mean_squares(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            for case, p, residuals in (("null-1", 0.01, (3.0, 1.0)), ("null-2", 0.5, (0.0, -2.0)),
+                                       ("drag-high", 0.001, (9.0, 9.0))):   # not a null: left out
+                folder = Path(tmp, case)
+                folder.mkdir()
+                score = {"n": 2, "p": p}
+                with open(folder / "summary.json", "w") as f:
+                    json.dump({"before": {"fitted": score, "held_out_fresh": score, "fitted_fresh": score}}, f)
+                with open(folder / "points.csv", "w", newline="") as f:
+                    w = csv.writer(f)
+                    w.writerow(["observable", "held_out", "residual_before"])
+                    w.writerow(["j_mid", 0, residuals[0]])
+                    w.writerow(["front_arrival", 0, residuals[1]])
+                    w.writerow(["front_arrival", 1, 50.0])   # held out: not a fitted point
+            code, out, err = run("null_p_values.py", tmp)
+            self.assertEqual(code, 0, err)
+            self.assertIn("2 null calibrations in 1 folders", out)
+            # One of 2 below 0.05 (a uniform p: 0.1 expected; at least one: 1 - 0.95^2 = 0.0975).
+            self.assertIn("| fitted (surface) | 2 | 1 (0.1; 0.098) | 1 (0.2; 0.190) |", out)
+            # j_mid: 9 and 0, mean 4.5 (se 4.5), one of two beyond 2.5, none beyond 3, the largest in null-1.
+            self.assertIn("| j_mid | 2 | 4.500 (4.500) | 50.00 % | 0.00 % | 1 |", out)
+            self.assertIn("| front_arrival | 2 | 2.500 (1.500) | 0.00 % | 0.00 % | 1 |", out)
+        self.assertEqual(run("null_p_values.py")[0], 2)
+        with tempfile.TemporaryDirectory() as tmp:
+            self.assertEqual(run("null_p_values.py", tmp)[0], 2)
+
+
 class Reservations(unittest.TestCase):
     """calibrate/reservations_check.py: both reservations where both are due."""
 
