@@ -8,7 +8,10 @@ For each folder: how many calibrations added an effect; the runs simulated (beyo
 held) per calibration that added one, median and range, and over every calibration; the calibrations' own process CPU (cases.csv
 process_cpu_s, where the binary records it) and wall, in all and median per calibration with an
 effect; and of the single planted effects identified, those whose verdict names an alternative
-(rule 5) and those with a plain "effect found" (no reservation of any kind).
+(rule 5) and those with a plain "effect found" (no reservation of any kind); of those not identified,
+those where rule 5 named the planted effect among the alternatives the data do not exclude (a verdict
+"effect found; these data do not exclude another effect in its place" with the planted one among the
+named: the data cannot tell the two apart; counted beside the identifications, never in them).
 """
 import csv
 import os
@@ -42,7 +45,18 @@ def counts(folder):
     plain = [r["case"] for r in single if r["verdict"] == "effect found"]
     lines.append(f"  single planted effects identified: {len(single)}; with an alternative named (rule 5): {len(named)}"
                  + (f" ({', '.join(named)})" if named else "") + f"; with a plain \"effect found\": {len(plain)}")
+    every_single = [r for r in rows if r["truth"] not in NOT_SINGLE]
+    as_alternative = [r["case"] for r in every_single if r["identified"] != "True" and planted_named(r)]
+    if every_single:
+        lines.append(f"  not identified, the planted effect named as an alternative the data do not exclude (rule 5): "
+                     f"{len(as_alternative)}" + (f" ({', '.join(as_alternative)})" if as_alternative else "")
+                     + f"; identified or so named: {len(single) + len(as_alternative)} of {len(every_single)}")
     return lines
+
+
+def planted_named(row):
+    """Whether rule 5 named the row's planted effect among the alternatives to an effect the loop added."""
+    return any(row["truth"] in names.split(",") for names in row.get("alternatives", "").split("; "))
 
 
 def main(args):

@@ -972,6 +972,9 @@ class AlternativesReplayCompare(unittest.TestCase):
             self.assertIn('single planted effects identified: 2; with an alternative named (rule 5): 1 (drag-low); '
                           'with a plain "effect found": 1', out)
             self.assertIn("process CPU: 460 s over every calibration; median per calibration with an effect 115 s", out)
+            # rolling-high read as linear drag with its planted rolling resistance not excluded: beside, not in.
+            self.assertIn("not identified, the planted effect named as an alternative the data do not exclude "
+                          "(rule 5): 1 (rolling-high); identified or so named: 3 of 3", out)
             # Summaries made without the option: no such lines, an empty column.
             for case in cases:
                 s = json.loads((folder / case / "summary.json").read_text())
