@@ -1,34 +1,50 @@
 #!/usr/bin/python3
 """Are the loop's p-values what they say on the blind passes' null twins (no planted effect, so the baseline
-model is the truth and every p-value of its baseline fit should be uniform)? A diagnostic; it decides nothing.
+model is the truth and every p-value of its baseline fit should be about uniform)? A diagnostic; it decides
+nothing.
 
     /usr/bin/python3 calibrate/null_p_values.py PASS_DIR [PASS_DIR...]
 
-Reads each pass's null cases (folders null-*; summary.json, points.csv). Part 1: the baseline fit's p-values
-as the loop computed them (summary.json "before": the fitted points on the response surface, which rule 1's
-gate and rule 5 read; the held-out points on fresh seeds, which the held-out test reads; and the fitted points
-on fresh seeds), each as the count below 0.05 and 0.10 against the count a uniform p gives (with its binomial
-tail probability: the chance of at least that many), the quartiles, and the Kolmogorov-Smirnov distance to
-uniform with its p. Part 2, per observable: the fitted points' whitened baseline residuals (points.csv
-residual_before, the surface's), their mean square (1 where the stated se holds; the sample variances' own
-scatter raises it a little, about 1.08-1.10 at 10 data runs and 6 model replicates: calibrate/tails_chi2.py's
-"normal" column), the share beyond 2.5 (a normal's 1.24 %) and beyond 3 (0.27 %), and how often the observable
-holds the calibration's largest residual. Exit 2 on usage or a folder without null cases."""
+Reads each pass's null cases (folders null-*: summary.json, points.csv, and the twin's data file
+twins/null-*.toml for its floor). Part 1: the baseline fit's p-values as the loop computed them (summary.json
+"before": the fitted points on the response surface, which rule 1's gate and rule 5 read; the held-out points
+on fresh seeds, which the held-out test reads; the fitted points on fresh seeds), each as the count below 0.05
+and 0.10 against a uniform p's (with the binomial chance of at least that many), the quartiles, and the
+Kolmogorov-Smirnov distance to uniform with its p. A uniform p is the reference with known variances; the
+loop's are estimated from a few runs, which raises every point's chi^2 a little (below). Part 2: the
+calibrations whose surface p is below 0.05, with each observable's sum of squared whitened residuals over
+its points (points.csv residual_before, the surface's). Part 3, per observable, over every null's fitted
+points: the mean square of those residuals with its se counted over the calibrations (the points of one
+calibration share a surface and a fit), and what the stated se's give it: the share of the stated variance
+that is not the data's floor, mean over the points of (e^2 - f^2 + se_s^2) / (e^2 + se_s^2) with e the
+data's se (its floor f = floor_relative x |value| added in quadrature, calibrate/data_file.cpp) and se_s the
+surface's, all on the fit scale; then that times a point's chi^2 for normal samples with variances estimated
+from 10 data runs and 5 nodes of 6 (calibrate/tails_chi2.py, about 1.10); the share beyond 2.5 and 3 with
+that construction's reference beside (about 2.1 % and 0.7 %; 1.24 % and 0.27 % with known variances); and
+how often the observable holds a calibration's largest residual. Exit 2 on usage, or when no folder holds a
+null case."""
 import csv
 import json
 import math
 import sys
-from collections import defaultdict
+import tomllib
+from collections import defaultdict, namedtuple
 from pathlib import Path
 
+import numpy as np
 from scipy import stats
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from tails_chi2 import SEED, normal_reference  # noqa: E402
+
+LINEAR = {"exit_offset", "clog_share", "ln_s_plus_1"}   # calibrate/data_file.cpp default_scale
 SCORES = (("fitted (surface)", "fitted"), ("held-out (fresh seeds)", "held_out_fresh"),
           ("fitted (fresh seeds)", "fitted_fresh"))
+Null = namedtuple("Null", "folder case summary rows floor")
 
 
 def nulls(folders):
-    """[(folder, case, summary, fitted point rows)] of every null case."""
+    """Every null case of the folders, with its fitted points and its data floor (relative)."""
     out = []
     for folder in folders:
         for case in sorted(Path(folder).glob("null-*/summary.json")):
@@ -37,16 +53,27 @@ def nulls(folders):
             with open(case.parent / "points.csv", newline="") as f:
                 rows = [r for r in csv.DictReader(f)
                         if r["held_out"] == "0" and r["residual_before"] not in ("", "nan")]
-            out.append((folder, case.parent.name, summary, rows))
+            twin = Path(folder, "twins", case.parent.name + ".toml")
+            floor = 0.0
+            if twin.is_file():
+                with open(twin, "rb") as f:
+                    floor = tomllib.load(f).get("observable", {}).get("floor_relative", 0.0)
+            out.append(Null(folder, case.parent.name, summary, rows, floor))
     return out
 
 
+def statistics_quantiles(ps):
+    """The quartiles of a sample (linear interpolation between order statistics)."""
+    return np.quantile(ps, [0.25, 0.5, 0.75])
+
+
 def p_value_lines(cases):
+    """Part 1: each score's p-values against a uniform's."""
     yield "| baseline p-value | nulls | below 0.05 (uniform; P at least) | below 0.10 (uniform; P at least) " \
           "| quartiles | KS distance (p) |"
     yield "| :-- | --: | :-- | :-- | :-- | :-- |"
     for name, key in SCORES:
-        ps = sorted(c[2]["before"][key]["p"] for c in cases if key in c[2]["before"])
+        ps = [c.summary["before"][key]["p"] for c in cases if key in c.summary["before"]]
         n = len(ps)
         if n == 0:
             continue
@@ -54,32 +81,78 @@ def p_value_lines(cases):
         for a in (0.05, 0.10):
             k = sum(p < a for p in ps)
             cells.append(f"{k} ({n * a:.1f}; {stats.binom.sf(k - 1, n, a):.3f})")
-        q = [ps[min(n - 1, int(round(f * (n - 1))))] for f in (0.25, 0.5, 0.75)]
+        q = statistics_quantiles(ps)
         ks = stats.kstest(ps, "uniform")
         yield f"| {name} | {n} | {cells[0]} | {cells[1]} | {q[0]:.2f}, {q[1]:.2f}, {q[2]:.2f} " \
               f"| {ks.statistic:.3f} ({ks.pvalue:.3f}) |"
 
 
-def observable_lines(cases):
-    squares = defaultdict(list)
-    largest = defaultdict(int)
-    for _, _, _, rows in cases:
-        if not rows:
+def low_p_lines(cases, observables):
+    """Part 2: the calibrations whose surface p is below 0.05, each observable's sum of squares (points)."""
+    yield "| pass | null | surface p | " + " | ".join(f"{o}: sum of squares (points)" for o in observables) + " |"
+    yield "| :-- | :-- | --: |" + " --: |" * len(observables)
+    for c in cases:
+        if c.summary["before"]["fitted"]["p"] >= 0.05:
             continue
-        for r in rows:
-            squares[r["observable"]].append(float(r["residual_before"]) ** 2)
-        top = max(rows, key=lambda r: abs(float(r["residual_before"])))
-        largest[top["observable"]] += 1
-    yield "| observable | points | mean square (se) | beyond 2.5 (normal 1.24 %) | beyond 3 (normal 0.27 %) " \
-          "| holds the largest |"
-    yield "| :-- | --: | :-- | --: | --: | --: |"
-    for o in sorted(squares):
-        xs = squares[o]
-        n = len(xs)
-        mean = sum(xs) / n
-        se = math.sqrt(sum((x - mean) ** 2 for x in xs) / (n - 1) / n) if n > 1 else math.nan
-        yield f"| {o} | {n} | {mean:.3f} ({se:.3f}) | {100 * sum(x > 6.25 for x in xs) / n:.2f} % " \
-              f"| {100 * sum(x > 9 for x in xs) / n:.2f} % | {largest[o]} |"
+        sums = defaultdict(float)
+        counts = defaultdict(int)
+        for r in c.rows:
+            sums[r["observable"]] += float(r["residual_before"]) ** 2
+            counts[r["observable"]] += 1
+        yield f"| {Path(c.folder).name} | {c.case} | {c.summary['before']['fitted']['p']:.3f} | " + \
+            " | ".join(f"{sums[o]:.1f} ({counts[o]})" for o in observables) + " |"
+
+
+def on_fit_scale(observable, value, se):
+    return se if observable in LINEAR else se / abs(value)
+
+
+def stated_share(row, floor):
+    """The share of a point's stated variance that is not the data's floor (fit scale)."""
+    o, value = row["observable"], float(row["value"])
+    e = on_fit_scale(o, value, float(row["se"]))
+    se_s = on_fit_scale(o, float(row["before"]), float(row["before_se"]))
+    f = floor if o not in LINEAR else floor * abs(value)
+    return (max(e * e - f * f, 0.0) + se_s * se_s) / (e * e + se_s * se_s)
+
+
+def clustered_mean(per_case):
+    """The ratio mean sum(S)/sum(n) over calibrations [(S, n)] and its se counted over the calibrations."""
+    k = len(per_case)
+    total, n = sum(s for s, _ in per_case), sum(m for _, m in per_case)
+    mean = total / n
+    if k < 2:
+        return mean, math.nan
+    spread = sum((s - mean * m) ** 2 for s, m in per_case) / (k * (k - 1))
+    return mean, math.sqrt(spread) / (n / k)
+
+
+def observable_lines(cases, observables, reference):
+    """Part 3: per observable, the residuals' mean square against what the stated se's give it."""
+    chi2_normal = reference["chi2 own"][0]
+    beyond = reference["chi2 own beyond 6.25"][0], reference["chi2 own beyond 9"][0]
+    yield "| observable | points | mean square (se over calibrations) | not floor (share of the stated variance) " \
+          f"| expected (x {chi2_normal:.3f}) | beyond 2.5 (reference {100 * beyond[0]:.2f} %) " \
+          f"| beyond 3 (reference {100 * beyond[1]:.2f} %) | holds the largest |"
+    yield "| :-- | --: | :-- | --: | --: | --: | --: | --: |"
+    largest = defaultdict(int)
+    for c in cases:
+        if c.rows:
+            largest[max(c.rows, key=lambda r: abs(float(r["residual_before"])))["observable"]] += 1
+    for o in observables:
+        per_case, squares, shares = [], [], []
+        for c in cases:
+            xs = [float(r["residual_before"]) ** 2 for r in c.rows if r["observable"] == o]
+            if xs:
+                per_case.append((sum(xs), len(xs)))
+                squares += xs
+                shares += [stated_share(r, c.floor) for r in c.rows if r["observable"] == o]
+        mean, se = clustered_mean(per_case)
+        share = sum(shares) / len(shares)
+        n = len(squares)
+        yield f"| {o} | {n} | {mean:.3f} ({se:.3f}) | {share:.3f} | {share * chi2_normal:.3f} " \
+              f"| {100 * sum(x > 6.25 for x in squares) / n:.2f} % | {100 * sum(x > 9 for x in squares) / n:.2f} % " \
+              f"| {largest[o]} |"
 
 
 def main():
@@ -91,13 +164,14 @@ def main():
     if not cases:
         print(f"error: no null-* case with summary.json in {' '.join(folders)}", file=sys.stderr)
         sys.exit(2)
+    observables = sorted({r["observable"] for c in cases for r in c.rows})
+    reference = normal_reference(np.random.default_rng(SEED))
     print(f"{len(cases)} null calibrations in {len(folders)} folders")
-    print()
-    for line in p_value_lines(cases):
-        print(line)
-    print()
-    for line in observable_lines(cases):
-        print(line)
+    for part in (p_value_lines(cases), low_p_lines(cases, observables),
+                 observable_lines(cases, observables, reference)):
+        print()
+        for line in part:
+            print(line)
 
 
 if __name__ == "__main__":

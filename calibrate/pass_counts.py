@@ -9,9 +9,9 @@ held) per calibration that added one, median and range, and over every calibrati
 process_cpu_s, where the binary records it) and wall, in all and median per calibration with an
 effect; and of the single planted effects identified, those whose verdict names an alternative
 (rule 5) and those with a plain "effect found" (no reservation of any kind); of those not identified,
-those where rule 5 named the planted effect among the alternatives the data do not exclude (a verdict
-"effect found; these data do not exclude another effect in its place" with the planted one among the
-named: the data cannot tell the two apart; counted beside the identifications, never in them).
+those where rule 5 named the planted effect among the alternatives the data do not exclude to an effect
+the loop added (the data cannot tell the two apart; counted beside the identifications, never in them;
+only where rule 5 was asked).
 """
 import csv
 import os
@@ -47,7 +47,7 @@ def counts(folder):
                  + (f" ({', '.join(named)})" if named else "") + f"; with a plain \"effect found\": {len(plain)}")
     every_single = [r for r in rows if r["truth"] not in NOT_SINGLE]
     as_alternative = [r["case"] for r in every_single if r["identified"] != "True" and planted_named(r)]
-    if every_single:
+    if every_single and any(r.get("alternatives") for r in rows):   # rule 5 asked (a column, not empty)
         lines.append(f"  not identified, the planted effect named as an alternative the data do not exclude (rule 5): "
                      f"{len(as_alternative)}" + (f" ({', '.join(as_alternative)})" if as_alternative else "")
                      + f"; identified or so named: {len(single) + len(as_alternative)} of {len(every_single)}")

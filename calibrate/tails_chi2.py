@@ -20,11 +20,14 @@ Each draw takes 46 of a point's runs without replacement, on the loop's fit scal
 Per draw, the loop's chi^2 of the point, (y - s)^2 / (e^2 + se_s^2), and fresh_points.py's disagreement less
 its stated expectation, (f - s)^2 / v_f - (se_s^2 + se_f^2) / v_f with v_f = e^2 + se_f^2. Both would
 average 1 and 0 were every variance known; estimated from a normal sample's few runs they average more, given
-in the "normal" columns (the same draws' construction on standard normal samples, 200 000 draws; the scale
-does not matter). "tails" is the point's mean less the normal one: what the distribution's shape adds, with
+in the "normal" columns (the same draws' construction on standard normal samples; the scale does not
+matter). "tails" is the point's mean less the normal one: what the distribution's shape adds, with
 the draws' Monte Carlo se. The draws reuse one point's 150 runs, so a single run far out weighs in many
 draws: the point's own sample bounds what this can tell (its kurtosis is itself uncertain). The data's floor
-(floor_relative) is left out.
+(floor_relative) is left out, and so is the surface's lack-of-fit widening (the response is flat here).
+The normal reference is itself a Monte Carlo mean (1 000 000 draws): its se is added in quadrature to the
+tails' se. The per-observable summary also gives how often the point's chi^2 exceeds 3.84 and 9 (1 degree of
+freedom's 5 % and 0.27 % with known variances), as a check of the tail beside the mean.
 
 Then per observable, the mean over the points of the tails' excess (its se from the points' spread), each
 variant. Exit 2 on a missing store or usage. Deterministic (a fixed seed)."""
@@ -41,20 +44,27 @@ from replicate_tails import cells  # noqa: E402
 
 NODES, PER_NODE, DATA, FRESH = 5, 6, 10, 6
 TAKEN = NODES * PER_NODE + DATA + FRESH
-MIDDLE = np.array([-3, 12, 17, 12, -3]) / 35   # the quadratic's weights at the middle of 5 equally spaced nodes
-REFERENCE_DRAWS = 200_000
+REFERENCE_DRAWS, REFERENCE_CHUNK = 1_000_000, 100_000
+SEED = 20261129
+MEANS = ("chi2 own", "disagreement own", "chi2 pooled", "disagreement pooled")   # per point and in the summary
+TAILS = ("chi2 own beyond 3.84", "chi2 own beyond 6.25", "chi2 own beyond 9")    # in the summary only
 
 
 def quadratic_weights():
-    """The row of the equally weighted quadratic's hat matrix at the middle of 5 equally spaced nodes."""
+    """The row of the equally weighted quadratic's hat matrix at the middle of 5 equally spaced nodes:
+    (-3, 12, 17, 12, -3)/35, its squares summing to the leverage 17/35."""
     x = np.linspace(-1, 1, NODES)
     design = np.vstack([np.ones(NODES), x, x * x]).T
     return design[NODES // 2] @ np.linalg.solve(design.T @ design, design.T)
 
 
+MIDDLE = quadratic_weights()
+
+
 def statistics_of(draws):
     """Per draw (rows of TAKEN values): the loop's chi^2 and the fresh disagreement's excess, with the surface's
-    variance from each node's own runs and from the 5 nodes' pooled runs. Returns {name: per-draw values}."""
+    variance from each node's own runs and from the 5 nodes' pooled runs; and whether the first exceeds 3.84,
+    6.25 (a whitened residual beyond 2.5) and 9. Returns {name: per-draw values}."""
     nodes = draws[:, :NODES * PER_NODE].reshape(len(draws), NODES, PER_NODE)
     data = draws[:, NODES * PER_NODE:NODES * PER_NODE + DATA]
     fresh = draws[:, NODES * PER_NODE + DATA:]
@@ -69,6 +79,22 @@ def statistics_of(draws):
     for name, ss in se_s2.items():
         out[f"chi2 {name}"] = (y - s) ** 2 / (e2 + ss)
         out[f"disagreement {name}"] = (f - s) ** 2 / v_f - (ss + se_f2) / v_f
+    for limit in (3.84, 6.25, 9):
+        out[f"chi2 own beyond {limit}"] = (out["chi2 own"] > limit).astype(float)
+    return out
+
+
+def normal_reference(rng):
+    """{name: (mean, its Monte Carlo se)} of every statistic on standard normal samples."""
+    sums = {}
+    for _ in range(REFERENCE_DRAWS // REFERENCE_CHUNK):
+        for name, xs in statistics_of(rng.standard_normal((REFERENCE_CHUNK, TAKEN))).items():
+            total, squares = sums.get(name, (0.0, 0.0))
+            sums[name] = (total + xs.sum(), squares + (xs * xs).sum())
+    out = {}
+    for name, (total, squares) in sums.items():
+        mean = total / REFERENCE_DRAWS
+        out[name] = (mean, math.sqrt(max(squares / REFERENCE_DRAWS - mean * mean, 0) / REFERENCE_DRAWS))
     return out
 
 
@@ -77,6 +103,50 @@ def resampled(values, draws, rng):
     xs = np.asarray(values, dtype=float)
     order = rng.random((draws, len(xs))).argsort(axis=1)[:, :TAKEN]
     return xs[order]
+
+
+def point_rows(points, normal, draws, rng):
+    """The per-point table's lines, and {observable: {name: [each point's mean less the normal one]}}."""
+    lines = ["| series | point | observable | " + " | ".join(f"{n}: mean (normal) tails ± se" for n in MEANS) + " |",
+             "| :-- | :-- | :-- |" + " --: |" * len(MEANS)]
+    excess = {o: {n: [] for n in MEANS + TAILS} for o in OBSERVABLES}
+    for (series, _, label), values in sorted(points.items()):
+        for o in OBSERVABLES:
+            if len(values[o]) < TAKEN:
+                continue
+            per_draw = statistics_of(resampled(values[o], draws, rng))
+            cells = []
+            for n in MEANS + TAILS:
+                mean, se = per_draw[n].mean(), per_draw[n].std(ddof=1) / math.sqrt(draws)
+                excess[o][n].append(mean - normal[n][0])
+                if n in MEANS:
+                    cells.append(f"{mean:.3f} ({normal[n][0]:.3f}) {mean - normal[n][0]:+.3f} ± {se:.3f}")
+            lines.append(f"| {series} | {label} | {o} | " + " | ".join(cells) + " |")
+    return lines, excess
+
+
+def summary_rows(excess, normal):
+    """Per observable: the mean over the points of each statistic's excess over normal samples, its se from the
+    points' spread and the reference's own Monte Carlo se in quadrature; the tail rates in percent."""
+    names = MEANS + TAILS
+    lines = ["| observable | points | " + " | ".join(n.replace("beyond", "share beyond") + (" (%)" if n in TAILS else "")
+                                                   for n in names) + " |",
+             "| :-- | --: |" + " --: |" * len(names),
+             "| normal samples | | " + " | ".join(f"{normal[n][0] * (100 if n in TAILS else 1):.3f} ± "
+                                                  f"{normal[n][1] * (100 if n in TAILS else 1):.3f}" for n in names)
+             + " |"]
+    for o in OBSERVABLES:
+        k = len(excess[o][MEANS[0]])
+        if k == 0:
+            continue
+        cells = []
+        for n in names:
+            xs = excess[o][n]
+            se = math.hypot(np.std(xs, ddof=1) / math.sqrt(k) if k > 1 else math.nan, normal[n][1])
+            scale = 100 if n in TAILS else 1
+            cells.append(f"{scale * np.mean(xs):+.3f} ± {scale * se:.3f}")
+        lines.append(f"| {o} | {k} | " + " | ".join(cells) + " |")
+    return lines
 
 
 def main():
@@ -90,39 +160,15 @@ def main():
     if not Path(args.store).is_file() or args.draws < 2:
         print(__doc__, file=sys.stderr)
         sys.exit(2)
-    assert np.allclose(quadratic_weights(), MIDDLE)
-    rng = np.random.default_rng(20261129)
-    normal = {k: v.mean() for k, v in statistics_of(rng.standard_normal((REFERENCE_DRAWS, TAKEN))).items()}
-    names = list(normal)
-    print("| series | point | observable | " + " | ".join(f"{n}: mean (normal) tails ± se" for n in names) + " |")
-    print("| :-- | :-- | :-- |" + " --: |" * len(names))
-    excess = {o: {n: [] for n in names} for o in OBSERVABLES}
-    for (series, _, label), values in sorted(cells(args.store).items()):
-        for o in OBSERVABLES:
-            if len(values[o]) < TAKEN:
-                continue
-            per_draw = statistics_of(resampled(values[o], args.draws, rng))
-            row = []
-            for n in names:
-                mean, se = per_draw[n].mean(), per_draw[n].std(ddof=1) / math.sqrt(args.draws)
-                excess[o][n].append(mean - normal[n])
-                row.append(f"{mean:.3f} ({normal[n]:.3f}) {mean - normal[n]:+.3f} ± {se:.3f}")
-            print(f"| {series} | {label} | {o} | " + " | ".join(row) + " |")
+    rng = np.random.default_rng(SEED)
+    normal = normal_reference(rng)
+    lines, excess = point_rows(cells(args.store), normal, args.draws, rng)
+    print("\n".join(lines))
     print()
-    print("Per observable, the tails' excess averaged over the points (se from the points' spread):")
+    print("Per observable, the tails' excess over normal samples averaged over the points (the tail shares in "
+          "percentage points); first row, the normal samples' own values:")
     print()
-    print("| observable | points | " + " | ".join(names) + " |")
-    print("| :-- | --: |" + " --: |" * len(names))
-    for o in OBSERVABLES:
-        k = len(excess[o][names[0]])
-        if k == 0:
-            continue
-        cols = []
-        for n in names:
-            xs = excess[o][n]
-            se = np.std(xs, ddof=1) / math.sqrt(k) if k > 1 else math.nan
-            cols.append(f"{np.mean(xs):+.3f} ± {se:.3f}")
-        print(f"| {o} | {k} | " + " | ".join(cols) + " |")
+    print("\n".join(summary_rows(excess, normal)))
 
 
 if __name__ == "__main__":

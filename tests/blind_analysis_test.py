@@ -507,6 +507,28 @@ class BlindAnalysis(unittest.TestCase):
             self.assertIn("process CPU: 540 s over every calibration; median per calibration with an effect 20 s", out)
             self.assertIn("wall: 21 s over every calibration; median per calibration with an effect 6 s", out)
 
+    def test_pass_counts_names_a_planted_effect_rule_5_left_open_beside_the_identified(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            fields = ["case", "truth", "added", "identified", "verdict", "alternatives", "runs_simulated"]
+            found = "effect found; these data do not exclude another effect in its place"
+            rows = [["a", "linear_drag", "x=1", "True", "effect found", "none", 100],
+                    ["b", "rolling_resistance", "x=2", "False", found, "spinning_friction,rolling_resistance", 100],
+                    ["c", "rolling_resistance", "x=2", "False", found, "linear_drag", 100],   # the truth not named
+                    ["d", "size_scatter", "", "", "consistent with noise", "none", 100]]
+            path = Path(tmp) / "cases.csv"
+            with open(path, "w", newline="") as f:
+                csv.writer(f).writerows([fields] + rows)
+            code, out, _ = run("pass_counts.py", tmp)
+            self.assertEqual(code, 0)
+            self.assertIn("not identified, the planted effect named as an alternative the data do not exclude "
+                          "(rule 5): 1 (b); identified or so named: 2 of 4", out)
+            with open(path, "w", newline="") as f:   # a pass before rule 5: no such line, rather than a 0
+                csv.writer(f).writerows([fields[:5] + fields[6:]] + [r[:5] + r[6:] for r in rows])
+            code, out, err = run("pass_counts.py", tmp)
+            self.assertEqual(code, 0, err)
+            self.assertIn("single planted effects identified: 1", out)
+            self.assertNotIn("identified or so named", out)
+
     def test_decisive_rounds_finds_the_stopped_round_once(self):
         # Once: the replay of spin-high beside the pass is not counted.
         code, out, _ = run("decisive_rounds.py", "1e-3", self.pass_dir)
@@ -1108,6 +1130,16 @@ class TailsChi2(unittest.TestCase):
                 self.assertLess(abs(tails(rows[0], column)), 0.12, rows[0])
             self.assertGreater(tails(rows[1], 1), 0.3, rows[1])
             self.assertGreater(tails(rows[1], 3), 0.3, rows[1])
+            # The loop's own chi^2 is not raised by the jams: the surface's 30 runs state a se to match.
+            self.assertLess(abs(tails(rows[1], 0)), 0.12, rows[1])
+            # The normal reference itself: a point's chi^2 with variances estimated from 10 data runs and 5 nodes
+            # of 6 lies above 1 (about 1.10), less with the nodes' variance pooled; the disagreement's about +0.17.
+            row = next(line for line in out.splitlines() if line.startswith("| normal samples"))
+            normal = [float(c.split(" ± ")[0]) for c in row.strip(" |").split("|")[2:]]
+            own, disagreement, pooled = normal[0], normal[1], normal[2]
+            self.assertTrue(1.07 < own < 1.14 and 1.05 < pooled < own, normal)
+            self.assertTrue(0.12 < disagreement < 0.22, normal)
+            self.assertTrue(5.5 < normal[4] < 7.0, normal)   # beyond 3.84: above the 5 % of known variances
         self.assertEqual(run("tails_chi2.py", "/nonexistent")[0], 2)
 
 
@@ -1116,27 +1148,41 @@ class NullPValues(unittest.TestCase):
 
     def test_counts_the_low_p_values_and_the_mean_squares(self):
         with tempfile.TemporaryDirectory() as tmp:
-            for case, p, residuals in (("null-1", 0.01, (3.0, 1.0)), ("null-2", 0.5, (0.0, -2.0)),
-                                       ("drag-high", 0.001, (9.0, 9.0))):   # not a null: left out
+            (Path(tmp) / "twins").mkdir()
+            cases = (("null-1", (0.01, 0.2, 0.3), (3.0, 1.0)), ("null-2", (0.5, 0.4, 0.9), (0.0, -2.0)),
+                     ("drag-high", (0.001,) * 3, (9.0, 9.0)))   # not a null: left out
+            for case, ps, residuals in cases:
                 folder = Path(tmp, case)
                 folder.mkdir()
-                score = {"n": 2, "p": p}
-                with open(folder / "summary.json", "w") as f:
-                    json.dump({"before": {"fitted": score, "held_out_fresh": score, "fitted_fresh": score}}, f)
+                (Path(tmp) / "twins" / f"{case}.toml").write_text("[observable]\nfloor_relative = 0.03\n")
+                before = {key: {"n": 2, "p": p} for key, p in zip(("fitted", "held_out_fresh", "fitted_fresh"), ps)}
+                (folder / "summary.json").write_text(json.dumps({"before": before}))
                 with open(folder / "points.csv", "w", newline="") as f:
                     w = csv.writer(f)
-                    w.writerow(["observable", "held_out", "residual_before"])
-                    w.writerow(["j_mid", 0, residuals[0]])
-                    w.writerow(["front_arrival", 0, residuals[1]])
-                    w.writerow(["front_arrival", 1, 50.0])   # held out: not a fitted point
+                    w.writerow(["observable", "held_out", "value", "se", "before", "before_se", "residual_before"])
+                    # J_mid 10 +- 0.5 (fit scale 0.05: floor 0.03, 0.04 measured), the surface's 0.03 (20 +- 0.6).
+                    w.writerow(["j_mid", 0, 10.0, 0.5, 20.0, 0.6, residuals[0]])
+                    w.writerow(["exit_offset", 0, 0.0, 0.2, 0.0, 0.1, residuals[1]])   # linear: floor x |0| = 0
+                    w.writerow(["exit_offset", 1, 0.0, 0.2, 0.0, 0.1, 50.0])   # held out: not a fitted point
             code, out, err = run("null_p_values.py", tmp)
             self.assertEqual(code, 0, err)
             self.assertIn("2 null calibrations in 1 folders", out)
-            # One of 2 below 0.05 (a uniform p: 0.1 expected; at least one: 1 - 0.95^2 = 0.0975).
-            self.assertIn("| fitted (surface) | 2 | 1 (0.1; 0.098) | 1 (0.2; 0.190) |", out)
-            # j_mid: 9 and 0, mean 4.5 (se 4.5), one of two beyond 2.5, none beyond 3, the largest in null-1.
-            self.assertIn("| j_mid | 2 | 4.500 (4.500) | 50.00 % | 0.00 % | 1 |", out)
-            self.assertIn("| front_arrival | 2 | 2.500 (1.500) | 0.00 % | 0.00 % | 1 |", out)
+            # One of 2 below 0.05 (a uniform p: 0.1 expected; at least one: 1 - 0.95^2 = 0.0975); the quartiles
+            # of (0.01, 0.5) by linear interpolation; KS: the empirical cdf's largest gap, 1 - 0.5 (exact p 0.5).
+            self.assertIn("| fitted (surface) | 2 | 1 (0.1; 0.098) | 1 (0.2; 0.190) | 0.13, 0.26, 0.38 | 0.500 (0.500)",
+                          out)
+            self.assertIn("| held-out (fresh seeds) | 2 | 0 (0.1; 1.000) | 0 (0.2; 1.000) | 0.25, 0.30, 0.35 |", out)
+            self.assertIn("| fitted (fresh seeds) | 2 | 0 (0.1; 1.000) | 0 (0.2; 1.000) | 0.45, 0.60, 0.75 |", out)
+            # Part 2: null-1 only (p 0.01), its sums of squares per observable.
+            self.assertIn(f"| {Path(tmp).name} | null-1 | 0.010 | 1.0 (1) | 9.0 (1) |", out)
+            self.assertNotIn("| null-2 | 0.500", out)
+            # j_mid: squares 9 and 0, mean 4.5 (se over the two calibrations 4.5); not floor
+            # (0.0016 + 0.0009) / (0.0025 + 0.0009) = 0.735 at both.
+            row = next(line for line in out.splitlines() if line.startswith("| j_mid"))
+            self.assertTrue(row.startswith("| j_mid | 2 | 4.500 (4.500) | 0.735 | "), row)
+            self.assertTrue(row.endswith("| 50.00 % | 0.00 % | 1 |"), row)
+            row = next(line for line in out.splitlines() if line.startswith("| exit_offset"))
+            self.assertTrue(row.startswith("| exit_offset | 2 | 2.500 (1.500) | 1.000 | "), row)
         self.assertEqual(run("null_p_values.py")[0], 2)
         with tempfile.TemporaryDirectory() as tmp:
             self.assertEqual(run("null_p_values.py", tmp)[0], 2)
