@@ -353,7 +353,9 @@ TEST(SurfaceNoise, AnEffectThatChangesTheNoiseHasItsPartnerShareReadOffThePairs)
       EXPECT_GT(counted.stated / counted.observed, 0.9) << scale << " " << rho;
       EXPECT_LT(counted.stated / counted.observed, 1.25) << scale << " " << rho;
       EXPECT_NEAR(counted.observed, half.observed, 1e-12);  // the same draws
-      if (scale == 1.5) EXPECT_LT(half.stated / half.observed, 0.6);  // what was stated: the test can fail
+      if (scale == 1.5) {
+        EXPECT_LT(half.stated / half.observed, 0.6);  // what was stated: the test can fail
+      }
     }
 }
 
