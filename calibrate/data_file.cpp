@@ -41,11 +41,13 @@ double from_fit_scale(FitScale scale, double v) { return scale == FitScale::log 
 
 namespace {
 
-const std::vector<std::string> kRootKeys{"data", "source", "model", "observable", "design", "free", "points", "point"};
+const std::vector<std::string> kRootKeys{"data",   "source", "model",  "observable",
+                                         "floors", "design", "free",   "points", "point"};
 const std::vector<std::string> kDataKeys{"name", "description"};
 const std::vector<std::string> kSourceKeys{"citation", "method", "uncertainty"};
 const std::vector<std::string> kModelKeys{"scenario", "set", "replicates", "seed"};
 const std::vector<std::string> kObservableKeys{"kind", "scale", "uncertainty", "floor_relative"};
+const std::vector<std::string> kFloorKeys{"relative", "absolute"};
 const std::vector<std::string> kDesignKeys{"column", "key", "unit"};
 const std::vector<std::string> kFreeKeys{"key", "lo", "hi", "step", "measured", "measured_se"};
 const std::vector<std::string> kPointsKeys{"csv"};
@@ -171,10 +173,29 @@ std::string design_literal(const toml::node& n, const StrictTable& t, const std:
   t.fail(column, n, "must be a number or a string");
 }
 
+// [floors]: one entry per observable named, each an inline table with relative and/or absolute.
+std::vector<std::pair<ObservableKind, SeFloor>> read_floors(const toml::table& t, const std::string& source) {
+  StrictTable floors(&t, "floors", source, kKinds);
+  std::vector<std::pair<ObservableKind, SeFloor>> out;
+  for (const std::string& kind : kKinds) {
+    const toml::table* entry = floors.table(kind);
+    if (!entry) continue;
+    StrictTable e(entry, "floors." + kind, source, kFloorKeys);
+    SeFloor f;
+    const auto relative = e.number("relative", 0, 1);
+    const auto absolute = e.number("absolute", 0, 1e300);
+    if (!relative && !absolute) e.missing("relative", "required: relative (a share of the value) and/or absolute (in the observable's unit)");
+    f.relative = relative.value_or(0.0);
+    f.absolute = absolute.value_or(0.0);
+    out.emplace_back(kind_named(kind), f);
+  }
+  return out;
+}
+
 // Turn the file's uncertainty into a standard error, with the floor.
-double standard_error(double u, double value, const std::string& kind, double floor_relative) {
+double standard_error(double u, double value, const std::string& kind, SeFloor floor) {
   const double se = kind == "ci95" ? u / 1.959963984540054 : u;
-  return std::hypot(se, floor_relative * std::abs(value));
+  return std::hypot(se, floor.relative * std::abs(value), floor.absolute);
 }
 
 DataPoint read_point(StrictTable t, const DataFile& d, const std::string& uncertainty_kind) {
@@ -200,8 +221,8 @@ DataPoint read_point(StrictTable t, const DataFile& d, const std::string& uncert
   const auto u = t.number("uncertainty", 0, 1e300);
   if (!u) t.missing("uncertainty", fmt::format("required: the value's {}", uncertainty_kind));
   p.value = *value;
-  p.se = standard_error(*u, p.value, uncertainty_kind, d.floor_relative);
-  if (p.se <= 0) t.fail("uncertainty", *t.get("uncertainty"), "must be > 0 (or set [observable] floor_relative)");
+  p.se = standard_error(*u, p.value, uncertainty_kind, d.floor_of(p.observable));
+  if (p.se <= 0) t.fail("uncertainty", *t.get("uncertainty"), "must be > 0 (or set a floor: [observable] floor_relative, [floors])");
   if (auto r = t.integer("replicates", 1)) p.replicates = static_cast<int>(*r);
   p.held_out = t.boolean("held_out").value_or(false);
   return p;
@@ -293,6 +314,7 @@ DataFile parse_data_file(std::string_view text, std::string_view source_name, co
   if (!obs) throw ScenarioError({source, 1, 1}, "observable", "", "required: [observable] with kind");
   std::string uncertainty_kind;
   read_observable(StrictTable(obs, "observable", source, kObservableKeys), d, uncertainty_kind);
+  if (const toml::table* floors = root.table("floors")) d.floors = read_floors(*floors, source);
   std::set<std::string> names;
   for (const toml::table* t : tables_of(root, "design", "[[design]]")) {
     d.design.push_back(read_design(StrictTable(t, "design", source, kDesignKeys)));
@@ -417,6 +439,12 @@ std::string DataFile::observables_text() const {
 }
 
 double DataFile::fit_value(std::size_t i) const { return to_fit_scale(points[i].scale, points[i].value); }
+
+SeFloor DataFile::floor_of(ObservableKind k) const {
+  for (const auto& [kind, floor] : floors)
+    if (kind == k) return floor;
+  return {floor_relative, 0.0};
+}
 
 double DataFile::fit_se(std::size_t i) const {
   return points[i].scale == FitScale::log ? points[i].se / points[i].value : points[i].se;

@@ -11,6 +11,8 @@
 //   [source]      citation, method (measured | digitized | simulated), uncertainty (notes)
 //   [model]       scenario (relative to this file), set ["key=value", ...], replicates, seed
 //   [observable]  kind, scale, uncertainty (se | ci95), floor_relative  (the points' default observable)
+//   [floors]      optional, per observable: <kind> = { relative = share, absolute = in its unit }, in place
+//                 of floor_relative for that observable's points (an offset near 0 needs an absolute one)
 //   [[design]]    column, key, unit (d | lab)
 //   [[free]]      key, lo, hi, step, and optionally measured, measured_se (an independent measurement)
 //   [points]      csv = "file.csv" (relative to this file)   -- or --   [[point]] rows
@@ -28,6 +30,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace gapflow {
@@ -80,6 +83,13 @@ struct FreeParameter {
   SourceLocation where;
 };
 
+// A standard-error floor: what the replicates do not show (a calibration, a digitization, a systematic
+// the scatter cannot reveal), added in quadrature to a point's standard error.
+struct SeFloor {
+  double relative = 0;  // share of |value| (0.005: 0.5 %)
+  double absolute = 0;  // in the observable's own unit (particles/s, s, mm, particles)
+};
+
 struct DataPoint {
   std::vector<std::string> design;  // one TOML literal per design column ("4.5", "\"V\"")
   double value = 0;                 // observable, in its unit
@@ -102,7 +112,8 @@ struct DataFile {
   std::uint64_t seed = 1;                // run.seed of the model runs
   ObservableKind observable = ObservableKind::j_paper;  // the points' default observable
   FitScale scale = FitScale::log;                       // its fit scale
-  double floor_relative = 0;             // relative SE floor added in quadrature
+  double floor_relative = 0;             // relative SE floor added in quadrature (every observable without [floors])
+  std::vector<std::pair<ObservableKind, SeFloor>> floors;  // [floors]: per observable, in place of floor_relative
   std::vector<DesignColumn> design;
   std::vector<FreeParameter> free;
   std::vector<DataPoint> points;
@@ -121,6 +132,8 @@ struct DataFile {
   bool mixed_observables() const;
   // "j_mid on a log scale", or per observable with its point count when mixed.
   std::string observables_text() const;
+  // The floor of an observable's points: its [floors] entry, else floor_relative.
+  SeFloor floor_of(ObservableKind k) const;
   // Point i's fit-scale value and standard error.
   double fit_value(std::size_t i) const;
   double fit_se(std::size_t i) const;

@@ -49,6 +49,11 @@ void write_twin_file(std::ostream& o, const DataFile& d, const TwinDef& def, con
   o << fmt::format("]\nreplicates = {}\nseed = {}\n\n", d.model_replicates, def.model_seed.value_or(d.seed));
   o << fmt::format("[observable]\nkind = \"{}\"\nscale = \"{}\"\nuncertainty = \"se\"\nfloor_relative = {}\n\n",
                    to_string(d.observable), d.scale == FitScale::log ? "log" : "linear", number_text(d.floor_relative));
+  if (!d.floors.empty()) o << "[floors]\n";
+  for (const auto& [kind, floor] : d.floors)
+    o << fmt::format("{} = {{ relative = {}, absolute = {} }}\n", to_string(kind), number_text(floor.relative),
+                     number_text(floor.absolute));
+  if (!d.floors.empty()) o << "\n";
   for (const DesignColumn& c : d.design)
     o << fmt::format("[[design]]\ncolumn = {}\nkey = {}\nunit = \"{}\"\n\n", toml_quote(c.column), toml_quote(c.key),
                      c.in_diameters ? "d" : "lab");
@@ -86,8 +91,10 @@ ParameterSet without_planted_effects(const DataFile& design, const TwinTruth& tr
 // file's se (a standard error `se` of the mean of def.replicates runs, with the design's
 // floor) and the model's as the loop sees it, `model_se` (loop_model_se).
 double calibration_sigma(const DataFile& design, const Prediction& with, std::size_t i, double se, double model_se) {
-  const double floor = design.floor_relative * (design.points[i].scale == FitScale::log ? 1.0 : std::abs(with.value[i]));
-  return std::hypot(std::hypot(se, floor), model_se);
+  const SeFloor f = design.floor_of(design.points[i].observable);
+  const double value = std::abs(with.value[i]);
+  const double floor = std::hypot(f.relative * value, f.absolute);  // in the observable's unit
+  return std::hypot(std::hypot(se, design.points[i].scale == FitScale::log ? floor / value : floor), model_se);
 }
 
 // The run-to-run standard error at each point from the model's runs at every grid node

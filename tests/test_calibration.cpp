@@ -9,6 +9,7 @@
 #include "calibrate/twin.hpp"
 #include "common/random.hpp"
 #include "common/statistics.hpp"
+#include "studies/store.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <thread>
 
 namespace gapflow {
@@ -246,6 +248,37 @@ TEST(DataFile, MalformedFilesAreRejectedWithKeyAndLine) {
                head_lines + 8);
 }
 
+// [floors]: an observable's own floor in place of [observable] floor_relative; an offset near 0 mm
+// needs an absolute one, which a share of its value cannot give.
+TEST(DataFile, AnObservablesFloorReplacesTheDefaultOne) {
+  const std::string points =
+      "[[point]]\nW_over_d = 4\nvalue = 80\nuncertainty = 2\n"
+      "[[point]]\nW_over_d = 4\nobservable = \"exit_offset\"\nvalue = 0.5\nuncertainty = 0.1\n"
+      "[[point]]\nW_over_d = 4\nobservable = \"front_arrival\"\nvalue = 2\nuncertainty = 0.05\n";
+  const std::string head = std::string(kDataHead);
+  const std::string with_default = head.substr(0, head.find("[[design]]")) + "floor_relative = 0.1\n" +
+                                   head.substr(head.find("[[design]]"));
+  const DataFile d = parse_data_file(with_default + points +
+                                         "[floors]\nexit_offset = { absolute = 0.2 }\n"
+                                         "front_arrival = { relative = 0.05, absolute = 0.03 }\n",
+                                     "t.toml", source_path(""));
+  ASSERT_EQ(d.points.size(), 3u);
+  EXPECT_NEAR(d.points[0].se, std::hypot(2.0, 0.1 * 80), 1e-12);          // j_mid: the default, relative
+  EXPECT_NEAR(d.points[1].se, std::hypot(0.1, 0.2), 1e-12);               // exit offset: its absolute floor only
+  EXPECT_NEAR(d.points[2].se, std::hypot(0.05, 0.05 * 2, 0.03), 1e-12);   // both of its own, none of the default
+  EXPECT_DOUBLE_EQ(d.floor_of(ObservableKind::exit_spread).relative, 0.1);
+  EXPECT_DOUBLE_EQ(d.floor_of(ObservableKind::exit_offset).relative, 0.0);
+  // Each floor entry is checked where it stands.
+  const int head_lines = 16;
+  const std::string p1 = "[[point]]\nW_over_d = 4\nvalue = 80\nuncertainty = 2\n";
+  expect_error(p1 + p1 + "[floors]\nexit_offst = { absolute = 0.2 }\n", "floors.exit_offst", head_lines + 10);
+  expect_error(p1 + p1 + "[floors]\nexit_offset = { absolut = 0.2 }\n", "floors.exit_offset.absolut", head_lines + 10);
+  expect_error(p1 + p1 + "[floors]\nexit_offset = { absolute = -0.2 }\n", "floors.exit_offset.absolute", head_lines + 10);
+  expect_error(p1 + p1 + "[floors]\nj_mid = { relative = 2 }\n", "floors.j_mid.relative", head_lines + 10);
+  expect_error(p1 + p1 + "[floors]\nj_mid = { }\n", "floors.j_mid.relative", head_lines + 10);
+  expect_error(p1 + p1 + "[floors]\nj_mid = 0.01\n", "floors.j_mid", head_lines + 10);
+}
+
 TEST(DataFile, CsvPointsAreCheckedLikeInlineOnes) {
   TempDir dir("gapflow_datafile");
   std::ofstream(dir / "p.csv") << "# comment\nW_over_d,value,uncertainty\n4,80,2\n5,oops,2\n";
@@ -305,6 +338,38 @@ TEST(Twin, SetOfAFreeKeyIsItsTrueValueAndLeavesTheOtherDraws) {
   EXPECT_NE(drawn.planted[0].value, 0.24);
   EXPECT_EQ(fixed.planted[1].name, "linear_drag");
   EXPECT_DOUBLE_EQ(fixed.planted[1].value, drawn.planted[1].value);
+}
+
+// A twin's data file carries the design's floors: the calibration of the twin sees the noise the design states.
+TEST(Twin, TheDataFileKeepsTheDesignsFloors) {
+  TempDir dir("gapflow_twin_floors");
+  std::ifstream in(source_path("data/examples/tiny_design.toml"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string scenario = "\"../../scenarios/paper/no_obstruction_medium.toml\"";
+  ASSERT_NE(text.find(scenario), std::string::npos);
+  text.replace(text.find(scenario), scenario.size(),
+               "\"" + source_path("scenarios/paper/no_obstruction_medium.toml").string() + "\"");
+  text += "[[point]]\nW_over_d = 4\nincline_deg = 5\nobservable = \"exit_offset\"\nvalue = 0\nuncertainty = 1\n"
+          "[floors]\nexit_offset = { absolute = 0.3 }\nj_mid = { relative = 0.02 }\n";
+  std::ofstream(dir / "design.toml") << text;
+  const DataFile design = load_data_file(dir / "design.toml");
+  Store store(dir / "twin.sqlite");
+  EvaluatorOptions eo;
+  eo.workers = 2;
+  Evaluator ev(design, store, eo);
+  TwinDef def;
+  def.name = "floors";
+  def.seed = 3;
+  def.replicates = 2;
+  (void)make_twin(design, def, ev, dir / "twin.toml", dir / "truth.json");
+  const DataFile twin = load_data_file(dir / "twin.toml");
+  EXPECT_DOUBLE_EQ(twin.floor_of(ObservableKind::exit_offset).absolute, 0.3);
+  EXPECT_DOUBLE_EQ(twin.floor_of(ObservableKind::j_mid).relative, 0.02);
+  EXPECT_DOUBLE_EQ(twin.floor_of(ObservableKind::front_arrival).relative, 0.005);  // [observable] floor_relative
+  for (const DataPoint& p : twin.points) {
+    const SeFloor f = twin.floor_of(p.observable);
+    EXPECT_GE(p.se, std::hypot(f.relative * std::abs(p.value), f.absolute) - 1e-12);
+  }
 }
 
 // A design that declares a measurement of its free parameter gets, in each twin, a reading of

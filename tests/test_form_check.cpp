@@ -103,7 +103,7 @@ TEST(FormCheck, ALevelWithTooFewPointsKeepsASizeOfItsOwnUntested) {
   // so two levels are tested, on one degree of freedom (it would be two if the lone point were
   // left in the effect's own column, a level tested in all but name).
   std::vector<std::string> labels(kPoints, "a");
-  for (int i = 5; i < 11; ++i) labels[i] = "b";
+  for (int i = 5; i < 11; ++i) labels[i].assign(1, 'b');  // not = "b": a false -Wrestrict in GCC 12 (bug 105329)
   labels[11] = "c";
   RandomStream rng(9);
   const Eigen::MatrixXd X = fitted_directions();
