@@ -509,6 +509,11 @@ CalibrationResult calibrate(const DataFile& data, const CalibrationDef& def, Eva
   if (def.max_effects > 0) loop.attribute(base, surface, state);
   out.after = state;
   record_window(out.after, surface);
+  out.shared_covariance_bound = surface.shared_covariance_bound(out.after.params);
+  if (out.shared_covariance_bound.pairs > 0)
+    loop.say(fmt::format("final state: the quadratic's covariance with the added effects' shifts held at its "
+                         "Cauchy-Schwarz bound at {} of {} (point, effect) pairs",
+                         out.shared_covariance_bound.at_bound, out.shared_covariance_bound.pairs));
 
   // An alternative that was added itself (in a later round) stands beside the effect, not in its place.
   for (AddedEffect& e : out.effects)

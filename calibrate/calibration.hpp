@@ -161,6 +161,13 @@ struct AddedEffect {
   double size_correlation = NAN;
 };
 
+// How often the covariance of the quadratic with an added effect's shift (fit.hpp Surface::predict) is held at the
+// Cauchy-Schwarz bound of the two: over the points and the effects whose shifts share runs with the nodes.
+struct SharedCovarianceBound {
+  int pairs = 0;     // (point, effect) pairs with a shared covariance
+  int at_bound = 0;  // of them, those whose estimate lay beyond the bound (the stated se then rests on it)
+};
+
 struct CalibrationResult {
   std::string data_name, model;
   ModelState before, after;       // prediction = the response surface (calibrate/fit.hpp) at params
@@ -186,10 +193,12 @@ struct CalibrationResult {
   // (form_check.hpp laws_established: power below 0.8, or a check that asked it flags).
   double law_power = NAN;
   bool law_undetermined = false;
-  double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (fit.hpp)
+  double model_noise_share = 0;    // the model's share of the residual's variance at the baseline (deviance.hpp)
   double surface_noise_ratio = NAN;  // the baseline's true model variance over what independent nodes give, and
   double node_correlation = NAN;     // the replicates' correlation between nodes it comes from (surface_noise.hpp);
   double surface_noise_counted = NAN;  // the factor the surface counts there (node_correlation.hpp; 1 before it did)
+  SharedCovarianceBound shared_covariance_bound;  // at the final state: the quadratic's covariances with the added
+                                                  // effects' shifts held at their Cauchy-Schwarz bound (fit.hpp)
   // The held-out points after everything (fresh seeds), their chi^2 with the fitted parameters'
   // uncertainty carried to them (attribution.hpp held_out_chi_square): the verdict's test.
   ChiSquare held_out_fresh_fit_aware;

@@ -153,6 +153,8 @@ void write_summary_json(std::ostream& o, const DataFile& data, const Calibration
                    "  \"node_correlation\": {},\n  \"surface_noise_counted\": {},\n",
                    data.model_replicates, json_number(r.model_noise_share), json_number(r.surface_noise_ratio),
                    json_number(r.node_correlation), json_number(r.surface_noise_counted));
+  o << fmt::format("  \"shared_covariance_at_bound\": {},\n  \"shared_covariance_pairs\": {},\n",
+                   r.shared_covariance_bound.at_bound, r.shared_covariance_bound.pairs);
   o << fmt::format("  \"contenders\": {},\n", r.contenders);
   o << fmt::format("  \"alternatives\": {},\n", r.alternatives);
   o << fmt::format("  \"decisive_score_p\": {},\n", r.decisive_score_p);

@@ -200,16 +200,36 @@ std::vector<std::vector<std::size_t>> shared_nodes(const Surface& s) {
 // it; what is left is not counted. Held within the Cauchy-Schwarz
 // bound of the two parts it links (the shared nodes' share of the quadratic and the shift), so that
 // the se's estimates, each from a few runs, can never make the sum's variance negative.
-double shared_covariance(const Surface& s, std::size_t i, const Eigen::RowVectorXd& at_x, const std::vector<std::size_t>& shared,
-                         double paired, double shift_variance) {
+struct SharedCovariance {
+  double value = 0;       // fit-scale^2
+  bool at_bound = false;  // the estimate lay beyond the bound and was held there
+};
+SharedCovariance shared_covariance(const Surface& s, std::size_t i, const Eigen::RowVectorXd& at_x,
+                                   const std::vector<std::size_t>& shared, double paired, double shift_variance) {
   double weight = 0, shared_variance = 0;
   for (std::size_t n : shared) {
     const double c = at_x(static_cast<Eigen::Index>(n));
     weight += c;
     shared_variance += c * c * s.node_variance[i][n];
   }
-  const double bound = std::sqrt(shared_variance * shift_variance);
-  return std::clamp(weight * paired, -bound, bound);
+  const double bound = std::sqrt(shared_variance * shift_variance), estimate = weight * paired;
+  return {std::clamp(estimate, -bound, bound), std::abs(estimate) > bound};
+}
+
+// Per point and added effect whose shifts share runs with the quadratic's nodes: the covariance of
+// the two at `params`, as predict_fit counts it. `visit(i, k, covariance)`.
+template <typename Visit>
+void for_each_shared_covariance(const Surface& s, const ParameterSet& params, Visit&& visit) {
+  const Eigen::VectorXd b = basis(scaled(s, params), true);
+  const std::vector<std::vector<std::size_t>> shared = shared_nodes(s);
+  for (std::size_t i = 0; i < s.coef.size(); ++i)
+    for (std::size_t k = 0; k < s.effects.size(); ++k) {
+      if (shared[k].empty()) continue;
+      const EffectTerm& e = s.effects[k];
+      double v = 0, paired = 0;
+      (void)e.response(i, params.get(e.key, e.neutral) - e.neutral, v, &paired);
+      visit(i, k, shared_covariance(s, i, b.transpose() * s.node_weights[i], shared[k], paired, v));
+    }
 }
 
 }  // namespace
@@ -234,7 +254,8 @@ Prediction Surface::predict_fit(const ParameterSet& params) const {
       double v = 0, paired = 0;
       f += e.response(i, da, v, shared[k].empty() ? nullptr : &paired);
       var += v;
-      if (!shared[k].empty()) var += 2 * shared_covariance(*this, i, b.transpose() * node_weights[i], shared[k], paired, v);
+      if (!shared[k].empty())
+        var += 2 * shared_covariance(*this, i, b.transpose() * node_weights[i], shared[k], paired, v).value;
     }
     p.fit.push_back(f);
     p.se_fit.push_back(std::sqrt(std::max(var, 0.0)));
@@ -243,6 +264,15 @@ Prediction Surface::predict_fit(const ParameterSet& params) const {
     p.replicate_fit.emplace_back();
   }
   return p;
+}
+
+SharedCovarianceBound Surface::shared_covariance_bound(const ParameterSet& params) const {
+  SharedCovarianceBound out;
+  for_each_shared_covariance(*this, params, [&](std::size_t, std::size_t, const SharedCovariance& c) {
+    ++out.pairs;
+    out.at_bound += c.at_bound;
+  });
+  return out;
 }
 
 double Surface::misfit_part(const ParameterSet& params, std::size_t i) const {

@@ -64,6 +64,10 @@ struct Surface {
   // its weight squared), without the lack-of-fit widening: what the surface stated until the
   // replicates' correlation between nodes was counted (calibrate/surface_noise.hpp compares the two).
   double independent_nodes_variance(const ParameterSet& params, std::size_t i) const;
+  // At `params`: how many of the quadratic's covariances with the effects' shifts are held at their bound.
+  // Each comes from a few runs' se's; where they disagree the bound keeps the variance from going negative,
+  // and a bound that binds often says the stated se rests on the bound rather than the estimate.
+  SharedCovarianceBound shared_covariance_bound(const ParameterSet& params) const;
   // The lack of fit's share of the quadratic's variance at point i (0 where it is within the noise).
   double misfit_part(const ParameterSet& params, std::size_t i) const;
   // d(fit)/d(key) of a free parameter at `params`, per point.

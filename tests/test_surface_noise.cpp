@@ -380,5 +380,36 @@ TEST(SurfaceNoise, ATermPairedWithNodesOutsideTheSurfaceAddsItsVarianceAsIndepen
   EXPECT_LT(inside.predict_fit(at).se_fit[fitted], alone.predict_fit(at).se_fit[fitted]);
 }
 
+// The count of covariances held at their Cauchy-Schwarz bound (summary.json shared_covariance_at_bound). A
+// one-size term (shift se s) paired with the window's middle node states, at a size a, a shift variance
+// (a s)^2 and a covariance with that node's mean of -a s^2/2: within the bound sqrt(node variance) a s
+// while the node's se (here about 0.014, estimated from its runs) exceeds s/2. With s = 0.01 it does; with
+// the node's variance made tiny the bound binds at every point.
+TEST(SurfaceNoise, TheCovariancesHeldAtTheirBoundAreCounted) {
+  const DataFile design = design_v3();
+  BaselineFit base = nodes_with(design, 0.0, 0.05, 7);
+  const std::size_t points = design.points.size();
+  EffectTerm term = EffectTerm::single_step("e", "k", 0.0, 0.0, 1.0, 1.0, std::vector<double>(points, 0.2),
+                                            std::vector<double>(points, 0.01));
+  const ParameterSet at = base.params.with("k", 0.6);
+  Surface outside = base.surface;
+  term.paired_with = {base.grid[0]};  // 0.1: not a node of the window 0.2-0.4
+  outside.effects.push_back(term);
+  EXPECT_EQ(outside.shared_covariance_bound(at).pairs, 0);
+  term.paired_with = {base.grid[4]};  // 0.3: the window's middle node
+  Surface inside = base.surface;
+  inside.effects.push_back(term);
+  const SharedCovarianceBound within = inside.shared_covariance_bound(at);
+  EXPECT_EQ(within.pairs, static_cast<int>(points));
+  EXPECT_EQ(within.at_bound, 0);
+  std::size_t middle = 0;
+  while (middle < inside.nodes.size() && inside.nodes[middle].values != base.grid[4].values) ++middle;
+  ASSERT_LT(middle, inside.nodes.size());
+  for (std::vector<double>& node : inside.node_variance) node[middle] = 1e-12;
+  const SharedCovarianceBound held = inside.shared_covariance_bound(at);
+  EXPECT_EQ(held.pairs, static_cast<int>(points));
+  EXPECT_EQ(held.at_bound, static_cast<int>(points));
+}
+
 }  // namespace
 }  // namespace gapflow
