@@ -41,8 +41,8 @@ double from_fit_scale(FitScale scale, double v) { return scale == FitScale::log 
 
 namespace {
 
-const std::vector<std::string> kRootKeys{"data",   "source", "model",  "observable",
-                                         "floors", "design", "free",   "points", "point"};
+const std::vector<std::string> kRootKeys{"data", "source", "model", "observable", "floors",
+                                         "design", "free", "points", "point"};
 const std::vector<std::string> kDataKeys{"name", "description"};
 const std::vector<std::string> kSourceKeys{"citation", "method", "uncertainty"};
 const std::vector<std::string> kModelKeys{"scenario", "set", "replicates", "seed"};
@@ -173,21 +173,28 @@ std::string design_literal(const toml::node& n, const StrictTable& t, const std:
   t.fail(column, n, "must be a number or a string");
 }
 
-// [floors]: one entry per observable named, each an inline table with relative and/or absolute.
-std::vector<std::pair<ObservableKind, SeFloor>> read_floors(const toml::table& t, const std::string& source) {
+// One [floors] entry: which observable, its floor, and where it stands (for the check that a point measures it).
+struct FloorEntry {
+  ObservableKind observable;
+  SeFloor floor;
+  SourceLocation where;
+};
+
+// [floors]: one entry per observable named, each an inline table with relative and/or absolute. Read in
+// the observables' order (a TOML table keeps no file order): of several bad entries, that one is named.
+std::vector<FloorEntry> read_floors(const toml::table& t, const std::string& source) {
   StrictTable floors(&t, "floors", source, kKinds);
-  std::vector<std::pair<ObservableKind, SeFloor>> out;
+  std::vector<FloorEntry> out;
   for (const std::string& kind : kKinds) {
-    const toml::table* entry = floors.table(kind);
-    if (!entry) continue;
-    StrictTable e(entry, "floors." + kind, source, kFloorKeys);
-    SeFloor f;
+    const toml::node* n = floors.get(kind);
+    if (!n) continue;
+    if (!n->is_table()) floors.fail(kind, *n, "must be an inline table, e.g. { relative = 0.01 } or { absolute = 0.1 }");
+    StrictTable e(n->as_table(), "floors." + kind, source, kFloorKeys);
     const auto relative = e.number("relative", 0, 1);
     const auto absolute = e.number("absolute", 0, 1e300);
-    if (!relative && !absolute) e.missing("relative", "required: relative (a share of the value) and/or absolute (in the observable's unit)");
-    f.relative = relative.value_or(0.0);
-    f.absolute = absolute.value_or(0.0);
-    out.emplace_back(kind_named(kind), f);
+    if (!relative && !absolute)
+      e.missing("relative", "required: relative (a share of the value) and/or absolute (in the observable's unit)");
+    out.push_back({kind_named(kind), {relative.value_or(0.0), absolute.value_or(0.0)}, floors.at(*n)});
   }
   return out;
 }
@@ -314,7 +321,9 @@ DataFile parse_data_file(std::string_view text, std::string_view source_name, co
   if (!obs) throw ScenarioError({source, 1, 1}, "observable", "", "required: [observable] with kind");
   std::string uncertainty_kind;
   read_observable(StrictTable(obs, "observable", source, kObservableKeys), d, uncertainty_kind);
-  if (const toml::table* floors = root.table("floors")) d.floors = read_floors(*floors, source);
+  std::vector<FloorEntry> floors;
+  if (const toml::table* t = root.table("floors")) floors = read_floors(*t, source);
+  for (const FloorEntry& f : floors) d.floors.emplace_back(f.observable, f.floor);
   std::set<std::string> names;
   for (const toml::table* t : tables_of(root, "design", "[[design]]")) {
     d.design.push_back(read_design(StrictTable(t, "design", source, kDesignKeys)));
@@ -337,6 +346,11 @@ DataFile parse_data_file(std::string_view text, std::string_view source_name, co
   for (const toml::table* t : inline_points)
     d.points.push_back(read_point(StrictTable(t, "point", source, point_columns(d)), d, uncertainty_kind));
   if (d.points.size() < 2) throw ScenarioError({source, 1, 1}, "point", "", "required: at least 2 points");
+  // A floor no point uses is a mix-up of two observables' names more often than not.
+  for (const FloorEntry& f : floors)
+    if (std::none_of(d.points.begin(), d.points.end(), [&](const DataPoint& p) { return p.observable == f.observable; }))
+      throw ScenarioError(f.where, std::string("floors.") + to_string(f.observable), "",
+                          fmt::format("no point measures {}: a floor for an observable of the points", to_string(f.observable)));
   if (d.fitted_count() <= d.free.size())
     throw ScenarioError({source, 1, 1}, "point.held_out", "",
                         fmt::format("needs more fitted (not held-out) points than free parameters ({})", d.free.size()));

@@ -2,6 +2,7 @@
 
 #include "common/statistics.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace gapflow {

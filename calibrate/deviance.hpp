@@ -1,7 +1,7 @@
 // How far the model is from the data, on the fit scale: each point's total standard error (data and
 // model in quadrature), the whitened residuals, chi^2 over fitted or held-out points, the fits'
 // deviance, and the independent measurements of free parameters counted as data. Every fit and test
-// of the loop (calibrate/fit.hpp, error_measures.hpp, attribution.hpp) reads the data through these.
+// of the loop (calibrate/fit.hpp, error_measures.hpp, candidate_scores.hpp) reads the data through these.
 #pragma once
 
 #include "calibrate/data_file.hpp"

@@ -74,7 +74,7 @@ ModelState make_state(const DataFile& data, const ParameterSet& params, const Pr
   s.whitened = whitened_residual(data, p);
   s.fitted = error_measures(data, p, params, false, fitted_parameters);
   s.held_out = error_measures(data, p, params, true, fitted_parameters);
-  // The fits' objective, not chi^2 (fit.hpp); the measurements are data of the fit.
+  // The fits' objective, not chi^2 (deviance.hpp); the measurements are data of the fit.
   s.bic = bic(deviance_of(data, p, params), fitted_parameters, s.fitted.n + measured_count(data));
   return s;
 }

@@ -15,7 +15,7 @@ namespace gapflow {
 // nodes' replicates, one line each (e.g. "j_paper / clog_share: rho = +0.12 over 840 replicate pairs").
 std::vector<std::string> shared_run_correlations(const DataFile& data, const BaselineFit& base);
 
-// The model's share of the variance at the baseline (fit.hpp, model_noise_share) in words, with the
+// The model's share of the variance at the baseline (deviance.hpp, model_noise_share) in words, with the
 // least number of replicates that would bring it to 20 % where it is above (a lower bound).
 std::string model_noise_text(double share, int model_replicates);
 

@@ -17,8 +17,8 @@ its points (points.csv residual_before, the surface's). Part 3, per observable, 
 points: the mean square of those residuals with its se counted over the calibrations (the points of one
 calibration share a surface and a fit), and what the stated se's give it: the share of the stated variance
 that is not the data's floor, mean over the points of (e^2 - f^2 + se_s^2) / (e^2 + se_s^2) with e the
-data's se (its floor f = floor_relative x |value| added in quadrature, calibrate/data_file.cpp) and se_s the
-surface's, all on the fit scale; then that times a point's chi^2 for normal samples with variances estimated
+data's se (its floor f = hypot(relative x |value|, absolute) added in quadrature: the observable's [floors]
+entry, else [observable] floor_relative; calibrate/data_file.cpp) and se_s the surface's, all on the fit scale; then that times a point's chi^2 for normal samples with variances estimated
 from 10 data runs and 5 nodes of 6 (calibrate/tails_chi2.py, about 1.10); the share beyond 2.5 and 3 with
 that construction's reference beside (about 2.1 % and 0.7 %; 1.24 % and 0.27 % with known variances); and
 how often the observable holds a calibration's largest residual. Exit 2 on usage, or when no folder holds a
@@ -40,7 +40,20 @@ from tails_chi2 import SEED, normal_reference  # noqa: E402
 LINEAR = {"exit_offset", "clog_share", "ln_s_plus_1"}   # calibrate/data_file.cpp default_scale
 SCORES = (("fitted (surface)", "fitted"), ("held-out (fresh seeds)", "held_out_fresh"),
           ("fitted (fresh seeds)", "fitted_fresh"))
-Null = namedtuple("Null", "folder case summary rows floor")
+Null = namedtuple("Null", "folder case summary rows floors")
+
+
+def floors(twin):
+    """{observable: (relative, absolute)} of a twin's data file: its [floors] entries, and under None the
+    [observable] floor_relative that every other observable's points take (calibrate/data_file.hpp)."""
+    if not twin.is_file():
+        return {None: (0.0, 0.0)}
+    with open(twin, "rb") as f:
+        data = tomllib.load(f)
+    out = {None: (data.get("observable", {}).get("floor_relative", 0.0), 0.0)}
+    for kind, entry in data.get("floors", {}).items():
+        out[kind] = (entry.get("relative", 0.0), entry.get("absolute", 0.0))
+    return out
 
 
 def nulls(folders):
@@ -53,12 +66,8 @@ def nulls(folders):
             with open(case.parent / "points.csv", newline="") as f:
                 rows = [r for r in csv.DictReader(f)
                         if r["held_out"] == "0" and r["residual_before"] not in ("", "nan")]
-            twin = Path(folder, "twins", case.parent.name + ".toml")
-            floor = 0.0
-            if twin.is_file():
-                with open(twin, "rb") as f:
-                    floor = tomllib.load(f).get("observable", {}).get("floor_relative", 0.0)
-            out.append(Null(folder, case.parent.name, summary, rows, floor))
+            out.append(Null(folder, case.parent.name, summary, rows,
+                            floors(Path(folder, "twins", case.parent.name + ".toml"))))
     return out
 
 
@@ -107,12 +116,13 @@ def on_fit_scale(observable, value, se):
     return se if observable in LINEAR else se / abs(value)
 
 
-def stated_share(row, floor):
+def stated_share(row, floor_of):
     """The share of a point's stated variance that is not the data's floor (fit scale)."""
     o, value = row["observable"], float(row["value"])
     e = on_fit_scale(o, value, float(row["se"]))
     se_s = on_fit_scale(o, float(row["before"]), float(row["before_se"]))
-    f = floor if o not in LINEAR else floor * abs(value)
+    relative, absolute = floor_of.get(o, floor_of[None])
+    f = on_fit_scale(o, value, math.hypot(relative * abs(value), absolute))
     return (max(e * e - f * f, 0.0) + se_s * se_s) / (e * e + se_s * se_s)
 
 
@@ -146,7 +156,7 @@ def observable_lines(cases, observables, reference):
             if xs:
                 per_case.append((sum(xs), len(xs)))
                 squares += xs
-                shares += [stated_share(r, c.floor) for r in c.rows if r["observable"] == o]
+                shares += [stated_share(r, c.floors) for r in c.rows if r["observable"] == o]
         mean, se = clustered_mean(per_case)
         share = sum(shares) / len(shares)
         n = len(squares)

@@ -1154,7 +1154,8 @@ class NullPValues(unittest.TestCase):
             for case, ps, residuals in cases:
                 folder = Path(tmp, case)
                 folder.mkdir()
-                (Path(tmp) / "twins" / f"{case}.toml").write_text("[observable]\nfloor_relative = 0.03\n")
+                (Path(tmp) / "twins" / f"{case}.toml").write_text(
+                    "[observable]\nfloor_relative = 0.03\n[floors]\nexit_offset = { absolute = 0.1 }\n")
                 before = {key: {"n": 2, "p": p} for key, p in zip(("fitted", "held_out_fresh", "fitted_fresh"), ps)}
                 (folder / "summary.json").write_text(json.dumps({"before": before}))
                 with open(folder / "points.csv", "w", newline="") as f:
@@ -1182,7 +1183,9 @@ class NullPValues(unittest.TestCase):
             self.assertTrue(row.startswith("| j_mid | 2 | 4.500 (4.500) | 0.735 | "), row)
             self.assertTrue(row.endswith("| 50.00 % | 0.00 % | 1 |"), row)
             row = next(line for line in out.splitlines() if line.startswith("| exit_offset"))
-            self.assertTrue(row.startswith("| exit_offset | 2 | 2.500 (1.500) | 1.000 | "), row)
+            # The exit offset's own floor, absolute 0.1 (its relative default would give 0 x |0|): e^2 0.04, 0.01
+            # of it floor, the surface's 0.01: (0.03 + 0.01) / (0.04 + 0.01) = 0.8.
+            self.assertTrue(row.startswith("| exit_offset | 2 | 2.500 (1.500) | 0.800 | "), row)
         self.assertEqual(run("null_p_values.py")[0], 2)
         with tempfile.TemporaryDirectory() as tmp:
             self.assertEqual(run("null_p_values.py", tmp)[0], 2)

@@ -266,6 +266,7 @@ TEST(DataFile, AnObservablesFloorReplacesTheDefaultOne) {
   EXPECT_NEAR(d.points[0].se, std::hypot(2.0, 0.1 * 80), 1e-12);          // j_mid: the default, relative
   EXPECT_NEAR(d.points[1].se, std::hypot(0.1, 0.2), 1e-12);               // exit offset: its absolute floor only
   EXPECT_NEAR(d.points[2].se, std::hypot(0.05, 0.05 * 2, 0.03), 1e-12);   // both of its own, none of the default
+  EXPECT_NEAR(d.fit_se(2), std::hypot(0.05, 0.05 * 2, 0.03) / 2, 1e-12);   // log scale: an absolute floor / value
   EXPECT_DOUBLE_EQ(d.floor_of(ObservableKind::exit_spread).relative, 0.1);
   EXPECT_DOUBLE_EQ(d.floor_of(ObservableKind::exit_offset).relative, 0.0);
   // Each floor entry is checked where it stands.
@@ -277,6 +278,18 @@ TEST(DataFile, AnObservablesFloorReplacesTheDefaultOne) {
   expect_error(p1 + p1 + "[floors]\nj_mid = { relative = 2 }\n", "floors.j_mid.relative", head_lines + 10);
   expect_error(p1 + p1 + "[floors]\nj_mid = { }\n", "floors.j_mid.relative", head_lines + 10);
   expect_error(p1 + p1 + "[floors]\nj_mid = 0.01\n", "floors.j_mid", head_lines + 10);
+  try {  // at the top level (below a table header it would be that table's key)
+    (void)parse_data_file("floors = 1\n" + kDataHead + p1 + p1, "t.toml", source_path(""));
+    FAIL() << "floors = 1 accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.key(), "floors") << e.what();
+    EXPECT_EQ(e.where().line, 1) << e.what();
+  }
+  // A floor no point uses: most likely one observable's name for another's.
+  expect_error(p1 + p1 + "[floors]\nexit_spread = { relative = 0.01 }\n", "floors.exit_spread", head_lines + 10);
+  // Zero floors leave a zero uncertainty zero: refused at the point.
+  expect_error(p1 + "[[point]]\nW_over_d = 5\nvalue = 80\nuncertainty = 0\n[floors]\nj_mid = { relative = 0 }\n",
+               "point.uncertainty", head_lines + 8);
 }
 
 TEST(DataFile, CsvPointsAreCheckedLikeInlineOnes) {
@@ -366,9 +379,22 @@ TEST(Twin, TheDataFileKeepsTheDesignsFloors) {
   EXPECT_DOUBLE_EQ(twin.floor_of(ObservableKind::exit_offset).absolute, 0.3);
   EXPECT_DOUBLE_EQ(twin.floor_of(ObservableKind::j_mid).relative, 0.02);
   EXPECT_DOUBLE_EQ(twin.floor_of(ObservableKind::front_arrival).relative, 0.005);  // [observable] floor_relative
-  for (const DataPoint& p : twin.points) {
-    const SeFloor f = twin.floor_of(p.observable);
-    EXPECT_GE(p.se, std::hypot(f.relative * std::abs(p.value), f.absolute) - 1e-12);
+  // The same twin without its [floors]: every point's measured se (the file's uncertainty) is the same,
+  // the floors alone differ (the default's 0.5 % of the value in their place).
+  std::ifstream twin_in(dir / "twin.toml");
+  std::string twin_text((std::istreambuf_iterator<char>(twin_in)), std::istreambuf_iterator<char>());
+  const auto at = twin_text.find("[floors]\n");
+  ASSERT_NE(at, std::string::npos);
+  twin_text.erase(at, twin_text.find("\n\n", at) + 2 - at);
+  std::ofstream(dir / "bare.toml") << twin_text;
+  const DataFile bare = load_data_file(dir / "bare.toml");
+  ASSERT_EQ(bare.points.size(), twin.points.size());
+  for (std::size_t i = 0; i < twin.points.size(); ++i) {
+    const double v = std::abs(twin.points[i].value), measured2 = std::pow(bare.points[i].se, 2) - std::pow(0.005 * v, 2);
+    const SeFloor f = twin.floor_of(twin.points[i].observable);
+    EXPECT_NEAR(std::pow(twin.points[i].se, 2), measured2 + std::pow(f.relative * v, 2) + std::pow(f.absolute, 2),
+                1e-9 * std::pow(twin.points[i].se, 2))
+        << i;
   }
 }
 
@@ -470,7 +496,7 @@ TEST(Twin, PlantedNoncentralityRemovesTheNoiseOfUnpairedRuns) {
     double truth = 0;  // the floor is relative on a linear scale (value ~50 here): those points see ~nothing
     for (const DataPoint& q : design.points) {
       if (q.held_out) continue;
-      const double floor = design.floor_relative * (q.scale == FitScale::log ? 1.0 : 50.0);
+      const double floor = design.floor_of(q.observable).relative * (q.scale == FitScale::log ? 1.0 : 50.0);
       truth += delta * delta / (se[0] * se[0] * (1 + 10.0 / design.model_replicates) + floor * floor);
     }
     if (delta == 0)
