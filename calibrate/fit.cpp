@@ -216,20 +216,22 @@ SharedCovariance shared_covariance(const Surface& s, std::size_t i, const Eigen:
   return {std::clamp(estimate, -bound, bound), std::abs(estimate) > bound};
 }
 
-// Per point and added effect whose shifts share runs with the quadratic's nodes: the covariance of
-// the two at `params`, as predict_fit counts it. `visit(i, k, covariance)`.
-template <typename Visit>
-void for_each_shared_covariance(const Surface& s, const ParameterSet& params, Visit&& visit) {
-  const Eigen::VectorXd b = basis(scaled(s, params), true);
-  const std::vector<std::vector<std::size_t>> shared = shared_nodes(s);
-  for (std::size_t i = 0; i < s.coef.size(); ++i)
-    for (std::size_t k = 0; k < s.effects.size(); ++k) {
-      if (shared[k].empty()) continue;
-      const EffectTerm& e = s.effects[k];
-      double v = 0, paired = 0;
-      (void)e.response(i, params.get(e.key, e.neutral) - e.neutral, v, &paired);
-      visit(i, k, shared_covariance(s, i, b.transpose() * s.node_weights[i], shared[k], paired, v));
-    }
+// Effect k's part of the prediction at point i: its shift, the shift's variance and, where its shifts share
+// runs with the quadratic's nodes (`shared` not empty), their covariance. `at_x`: the quadratic's weights on the
+// nodes at the prediction's parameters. predict_fit adds these up; shared_covariance_bound counts the bound.
+struct EffectPart {
+  double shift = 0;           // fit scale
+  double variance = 0;        // fit-scale^2
+  SharedCovariance shared;    // zero where no run is shared
+};
+EffectPart effect_part(const Surface& s, std::size_t i, std::size_t k, const ParameterSet& params,
+                       const Eigen::RowVectorXd& at_x, const std::vector<std::size_t>& shared) {
+  const EffectTerm& e = s.effects[k];
+  EffectPart out;
+  double paired = 0;
+  out.shift = e.response(i, params.get(e.key, e.neutral) - e.neutral, out.variance, shared.empty() ? nullptr : &paired);
+  if (!shared.empty()) out.shared = shared_covariance(s, i, at_x, shared, paired, out.variance);
+  return out;
 }
 
 }  // namespace
@@ -245,17 +247,17 @@ Prediction Surface::predict_fit(const ParameterSet& params) const {
   Prediction p;
   const Eigen::VectorXd b = basis(scaled(*this, params), true);
   const std::vector<std::vector<std::size_t>> shared = shared_nodes(*this);
+  const bool any_shared = std::any_of(shared.begin(), shared.end(), [](const auto& n) { return !n.empty(); });
   for (std::size_t i = 0; i < coef.size(); ++i) {
     double f = b.dot(coef[i]);
     double var = b.dot(cov[i] * b);
+    // The quadratic's weights on its nodes, where an effect shares their runs (a surface made by hand has none).
+    const Eigen::RowVectorXd at_x = any_shared ? Eigen::RowVectorXd(b.transpose() * node_weights[i]) : Eigen::RowVectorXd();
     for (std::size_t k = 0; k < effects.size(); ++k) {
-      const EffectTerm& e = effects[k];
-      const double da = params.get(e.key, e.neutral) - e.neutral;
-      double v = 0, paired = 0;
-      f += e.response(i, da, v, shared[k].empty() ? nullptr : &paired);
-      var += v;
-      if (!shared[k].empty())
-        var += 2 * shared_covariance(*this, i, b.transpose() * node_weights[i], shared[k], paired, v).value;
+      const EffectPart part = effect_part(*this, i, k, params, at_x, shared[k]);
+      f += part.shift;
+      var += part.variance;
+      var += 2 * part.shared.value;  // 0 where no run is shared
     }
     p.fit.push_back(f);
     p.se_fit.push_back(std::sqrt(std::max(var, 0.0)));
@@ -268,10 +270,19 @@ Prediction Surface::predict_fit(const ParameterSet& params) const {
 
 SharedCovarianceBound Surface::shared_covariance_bound(const ParameterSet& params) const {
   SharedCovarianceBound out;
-  for_each_shared_covariance(*this, params, [&](std::size_t, std::size_t, const SharedCovariance& c) {
-    ++out.pairs;
-    out.at_bound += c.at_bound;
-  });
+  const Eigen::VectorXd b = basis(scaled(*this, params), true);
+  const std::vector<std::vector<std::size_t>> shared = shared_nodes(*this);
+  for (std::size_t i = 0; i < coef.size() && i < valid.size() && i < node_weights.size(); ++i) {
+    if (!valid[i]) continue;  // no fit reads it
+    const Eigen::RowVectorXd at_x = b.transpose() * node_weights[i];
+    for (std::size_t k = 0; k < effects.size(); ++k) {
+      if (shared[k].empty()) continue;
+      const EffectPart part = effect_part(*this, i, k, params, at_x, shared[k]);
+      if (!(part.variance > 0)) continue;  // a point the effect does not reach: nothing to covary
+      ++out.pairs;
+      out.at_bound += part.shared.at_bound;
+    }
+  }
   return out;
 }
 

@@ -37,7 +37,8 @@ from scipy import stats
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from tails_chi2 import SEED, normal_reference  # noqa: E402
 
-LINEAR = {"exit_offset", "clog_share", "ln_s_plus_1"}   # calibrate/data_file.cpp default_scale
+LINEAR = {"exit_offset", "clog_share", "ln_s_plus_1"}   # calibrate/data_file.cpp default_scale (the blind twins
+# keep every observable's default scale; a data file whose [observable] scale overrides it is not read right here)
 SCORES = (("fitted (surface)", "fitted"), ("held-out (fresh seeds)", "held_out_fresh"),
           ("fitted (fresh seeds)", "fitted_fresh"))
 Null = namedtuple("Null", "folder case summary rows floors")

@@ -287,6 +287,18 @@ TEST(DataFile, AnObservablesFloorReplacesTheDefaultOne) {
   }
   // A floor no point uses: most likely one observable's name for another's.
   expect_error(p1 + p1 + "[floors]\nexit_spread = { relative = 0.01 }\n", "floors.exit_spread", head_lines + 10);
+  try {  // the same with the points in a CSV file, located at the entry's table
+    TempDir dir("gapflow_floors_csv");
+    std::ofstream(dir / "p.csv") << "W_over_d,value,uncertainty\n4,80,2\n5,90,2\n";
+    (void)parse_data_file(kDataHead + "[points]\ncsv = \"" + (dir / "p.csv").string() +
+                              "\"\n[floors]\nexit_spread = { relative = 0.01 }\n",
+                          "t.toml", source_path(""));
+    FAIL() << "a floor no CSV point uses accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(e.key(), "floors.exit_spread") << e.what();
+    EXPECT_EQ(e.where().line, head_lines + 4) << e.what();
+    EXPECT_EQ(e.where().column, 15) << e.what();
+  }
   // Zero floors leave a zero uncertainty zero: refused at the point.
   expect_error(p1 + "[[point]]\nW_over_d = 5\nvalue = 80\nuncertainty = 0\n[floors]\nj_mid = { relative = 0 }\n",
                "point.uncertainty", head_lines + 8);
@@ -385,7 +397,9 @@ TEST(Twin, TheDataFileKeepsTheDesignsFloors) {
   std::string twin_text((std::istreambuf_iterator<char>(twin_in)), std::istreambuf_iterator<char>());
   const auto at = twin_text.find("[floors]\n");
   ASSERT_NE(at, std::string::npos);
-  twin_text.erase(at, twin_text.find("\n\n", at) + 2 - at);
+  const auto end = twin_text.find("\n\n", at);  // the writer ends the table with a blank line
+  ASSERT_NE(end, std::string::npos);
+  twin_text.erase(at, end + 2 - at);
   std::ofstream(dir / "bare.toml") << twin_text;
   const DataFile bare = load_data_file(dir / "bare.toml");
   ASSERT_EQ(bare.points.size(), twin.points.size());

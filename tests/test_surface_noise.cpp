@@ -381,34 +381,40 @@ TEST(SurfaceNoise, ATermPairedWithNodesOutsideTheSurfaceAddsItsVarianceAsIndepen
 }
 
 // The count of covariances held at their Cauchy-Schwarz bound (summary.json shared_covariance_at_bound). A
-// one-size term (shift se s) paired with the window's middle node states, at a size a, a shift variance
-// (a s)^2 and a covariance with that node's mean of -a s^2/2: within the bound sqrt(node variance) a s
-// while the node's se (here about 0.014, estimated from its runs) exceeds s/2. With s = 0.01 it does; with
-// the node's variance made tiny the bound binds at every point.
+// one-size term (shift se s a unit of size) paired with two of the window's nodes states, at a size a from
+// neutral, a shift variance (a s)^2 and a covariance with the quadratic of -(c1 + c2) a s^2/2 (c: the
+// quadratic's weights on the two nodes, 12/35 and 17/35 at the middle node); the bound is
+// sqrt(c1^2 v1 + c2^2 v2) a s (v: the nodes' variances). With s = 0.01 and the nodes' se about 0.014 it
+// holds; with their variances made tiny it binds at every point. The count reads the same parts the
+// prediction adds (fit.cpp effect_part), so it describes the stated se's own covariances.
 TEST(SurfaceNoise, TheCovariancesHeldAtTheirBoundAreCounted) {
   const DataFile design = design_v3();
   BaselineFit base = nodes_with(design, 0.0, 0.05, 7);
   const std::size_t points = design.points.size();
-  EffectTerm term = EffectTerm::single_step("e", "k", 0.0, 0.0, 1.0, 1.0, std::vector<double>(points, 0.2),
+  EffectTerm term = EffectTerm::single_step("e", "k", 0.5, 0.5, 1.5, 1.0, std::vector<double>(points, 0.2),
                                             std::vector<double>(points, 0.01));
-  const ParameterSet at = base.params.with("k", 0.6);
+  const ParameterSet at = base.params.with("k", 1.1);
   Surface outside = base.surface;
   term.paired_with = {base.grid[0]};  // 0.1: not a node of the window 0.2-0.4
   outside.effects.push_back(term);
   EXPECT_EQ(outside.shared_covariance_bound(at).pairs, 0);
-  term.paired_with = {base.grid[4]};  // 0.3: the window's middle node
+  term.paired_with = {base.grid[3], base.grid[4]};  // 0.25 and 0.3 (the window's middle node)
   Surface inside = base.surface;
   inside.effects.push_back(term);
   const SharedCovarianceBound within = inside.shared_covariance_bound(at);
   EXPECT_EQ(within.pairs, static_cast<int>(points));
   EXPECT_EQ(within.at_bound, 0);
-  std::size_t middle = 0;
-  while (middle < inside.nodes.size() && inside.nodes[middle].values != base.grid[4].values) ++middle;
-  ASSERT_LT(middle, inside.nodes.size());
-  for (std::vector<double>& node : inside.node_variance) node[middle] = 1e-12;
+  for (const ParameterSet& paired : term.paired_with) {
+    std::size_t n = 0;
+    while (n < inside.nodes.size() && inside.nodes[n].values != paired.values) ++n;
+    ASSERT_LT(n, inside.nodes.size());
+    for (std::vector<double>& node : inside.node_variance) node[n] = 1e-12;
+  }
   const SharedCovarianceBound held = inside.shared_covariance_bound(at);
   EXPECT_EQ(held.pairs, static_cast<int>(points));
   EXPECT_EQ(held.at_bound, static_cast<int>(points));
+  // At neutral the shift has no variance: nothing to covary, nothing counted.
+  EXPECT_EQ(inside.shared_covariance_bound(base.params.with("k", 0.5)).pairs, 0);
 }
 
 }  // namespace
