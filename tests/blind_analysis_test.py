@@ -1191,6 +1191,37 @@ class NullPValues(unittest.TestCase):
             self.assertEqual(run("null_p_values.py", tmp)[0], 2)
 
 
+class ControlBaseline(unittest.TestCase):
+    """calibrate/control_baseline.py: a pass and its control start from the same baseline, twin by twin."""
+
+    def test_names_a_baseline_that_differs_and_counts_the_sizes_correlation(self):
+        def write(folder, case, friction, chi2, effects):
+            (folder / case).mkdir(parents=True)
+            (folder / case / "summary.json").write_text(json.dumps(
+                {"before": {"params": {"particles.friction_particle": friction}, "fitted": {"chi2": chi2}},
+                 "effects": effects}))
+        with tempfile.TemporaryDirectory() as tmp:
+            mine, control = Path(tmp, "pass"), Path(tmp, "control")
+            counted = {"effect": "tilt", "size_correlation": 0.6}
+            bounded = {"effect": "drag", "size_correlation": None}
+            write(mine, "a", 0.3, 40.0, [counted])
+            write(control, "a", 0.3 * (1 + 1e-12), 40.0, [])           # within 1e-9: the same
+            write(mine, "b", 0.3, 40.0, [bounded, {"effect": "old"}])  # one from a build without the field
+            write(control, "b", 0.31, 40.0, [])
+            write(mine, "c", 0.3, 40.0, [])                            # not in the control: not compared
+            code, out, err = run("control_baseline.py", mine, control)
+            self.assertEqual(code, 0, err)
+            self.assertIn("b: DIFFERS: particles.friction_particle 0.3 against 0.31", out)
+            self.assertNotIn("a: DIFFERS", out)
+            self.assertIn("baseline: 1 of 2 calibrations the same", out)
+            self.assertIn("the sizes' correlation counted for 1 of 3 added effects (1 from a build without the field)",
+                          out)
+            self.assertEqual(run("control_baseline.py", mine, Path(tmp, "nothing"))[0], 2)
+            empty = Path(tmp, "empty")
+            empty.mkdir()
+            self.assertEqual(run("control_baseline.py", mine, empty)[0], 2)
+
+
 class Reservations(unittest.TestCase):
     """calibrate/reservations_check.py: both reservations where both are due."""
 
