@@ -153,7 +153,7 @@ CalibrateCommands::CalibrateCommands(CLI::App& app) : o_(std::make_unique<Option
   Options& o = *o_;
   o.calibrate = app.add_subcommand(
       "calibrate", "Fit a model to a measured-data file, trace the residual to a missing effect, report before/after");
-  o.calibrate->add_option("data", o.data_file, "Measured-data file (TOML), e.g. data/examples/gap_sweep_twin.toml")->required();
+  o.calibrate->add_option("data", o.data_file, "Measured-data file (TOML), e.g. data/silo/janda2008.toml")->required();
   o.calibrate->add_option("--model", o.model, "Model: 2d or 3d")->check(CLI::IsMember({"2d", "3d"}));
   o.calibrate->add_option("--jobs", o.jobs, "Worker threads (results do not depend on it)")->check(CLI::Range(1, 1024));
   o.calibrate->add_option("--out", o.out, "Output folder (default results/calibration/<data name>/)");
