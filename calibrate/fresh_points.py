@@ -3,9 +3,10 @@
 nothing). Reads each calibration's points.csv, whose fresh columns (before_fresh, after_fresh and their se:
 direct simulation on fresh seeds at the state's parameters) binaries from a2dddfa on write.
 
-    /usr/bin/python3 calibrate/fresh_points.py FOLDER [FOLDER...]
+    /usr/bin/python3 calibrate/fresh_points.py [--cases "CASE..."] FOLDER [FOLDER...]
 
-FOLDER: a blind pass or a replay of one (its <case>/points.csv and summary.json). On the fit scale (log for
+FOLDER: a blind pass or a replay of one (its <case>/points.csv and summary.json); --cases: only these
+calibrations of each (a control replayed on some of a pass's twins, compared with the pass on the same). On the fit scale (log for
 every observable but exit_offset, clog_share and ln_s_plus_1: calibrate/data_file.cpp default_scale; a data
 file that sets another scale is not read here), with y the data, s the surface's prediction, f the fresh
 runs', e, se_s, se_f their standard errors, v_s = e^2 + se_s^2, v_f = e^2 + se_f^2 and d = f - s, each point's
@@ -43,7 +44,7 @@ import statistics
 import sys
 from collections import defaultdict
 
-from blind_pass import calibrations
+from blind_pass import calibrations, take_option
 
 LINEAR = {"exit_offset", "clog_share", "ln_s_plus_1"}   # calibrate/data_file.cpp default_scale
 
@@ -88,12 +89,12 @@ def measured_term(summary, state):
                for m in summary.get("measured_free", []) if m["key"] in params and m.get("se"))
 
 
-def collect(folder):
+def collect(folder, cases=None):
     """{(state, side): [parts...]}, {(state, observable): [parts...]} over the fitted and held-out points of
     every calibration with fresh columns, the calibrations read, and the check's largest differences."""
     by_side, by_observable = defaultdict(list), defaultdict(list)
     read, worst = 0, {"surface": 0.0, "fresh": 0.0}
-    for case, summary_path in calibrations(folder):
+    for case, summary_path in calibrations(folder, cases=cases):
         points_path = os.path.join(os.path.dirname(summary_path), "points.csv")
         if not os.path.exists(points_path):
             continue
@@ -130,9 +131,10 @@ def mean(parts, key):
     return sum(p[key] for p in parts) / len(parts)
 
 
-def report(folder):
-    by_side, by_observable, read, worst = collect(folder)
-    print(f"{folder}: {read} calibrations with fresh values per point")
+def report(folder, cases=None):
+    by_side, by_observable, read, worst = collect(folder, cases)
+    only = f" (of the {len(cases)} cases asked)" if cases is not None else ""
+    print(f"{folder}: {read} calibrations with fresh values per point{only}")
     if not read:
         return
     print(f"  check: fitted chi^2 rebuilt here (with the measured parameters' term) against summary.json, largest "
@@ -190,8 +192,11 @@ def excess_text(parts, part):
     return f"{centre:+.3f} ± {se:.3f}"
 
 
-def main(folders):
-    if not folders:
+def main(args):
+    named = take_option(args, "--cases", "a list of case names")
+    cases = set(named.split()) if named is not None else None
+    folders = args
+    if not folders or cases == set():
         print(__doc__.split("\n\n")[1], file=sys.stderr)
         sys.exit(2)
     for folder in folders:
@@ -199,7 +204,12 @@ def main(folders):
             print(f"error: no folder {folder}", file=sys.stderr)
             sys.exit(2)
     for folder in folders:
-        report(folder)
+        missing = sorted(cases - {case for case, _ in calibrations(folder)}) if cases is not None else []
+        if missing:
+            print(f"error: {folder} has no calibration {', '.join(missing)}", file=sys.stderr)
+            sys.exit(2)
+    for folder in folders:
+        report(folder, cases)
 
 
 if __name__ == "__main__":

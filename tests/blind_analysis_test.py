@@ -796,6 +796,31 @@ class FreshPoints(unittest.TestCase):
         self.assertEqual(run("fresh_points.py", "/nonexistent")[0], 2)
         self.assertEqual(run("fresh_points.py")[0], 2)
 
+    def test_reads_only_the_cases_named(self):
+        # Two calibrations, one whose fresh runs disagree with its surface by 2 se_f (disagreement 2 per point)
+        # and one where they agree (0): --cases keeps the one named; a name the folder lacks is refused.
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, fresh in (("far", "1.2"), ("near", "1.0")):
+                case = Path(tmp, name)
+                case.mkdir()
+                row = f"4,exit_offset,0,1,0.1,1,0.1,1,0.1,0,0,{fresh},0.1,{fresh},0.1"
+                (case / "points.csv").write_text(self.HEADER + row + "\n")
+                chi2 = {"chi2": (1 - float(fresh)) ** 2 / 0.02}
+                state = {"params": {}, "fitted": {"chi2": 0.0}, "fitted_fresh": chi2}
+                (case / "summary.json").write_text(json.dumps({"before": state, "after": state}))
+            code, out, err = run("fresh_points.py", "--cases", "far", tmp)
+            self.assertEqual(code, 0, err)
+            self.assertIn("1 calibrations with fresh values per point (of the 1 cases asked)", out)
+            self.assertIn("largest difference: surface 0.000, fresh 0.000", out)
+            self.assertIn("| final | fitted | 1 | +2.000 | +0.000 (+0.000) | +2.000 (+1.000) |", out)
+            code, out, _ = run("fresh_points.py", tmp)
+            self.assertIn("2 calibrations with fresh values per point", out)
+            self.assertIn("| final | fitted | 2 | +1.000 | +0.000 (+0.000) | +1.000 (+1.000) |", out)
+            code, _, err = run("fresh_points.py", "--cases", "far elsewhere", tmp)
+            self.assertEqual(code, 2)
+            self.assertIn("no calibration elsewhere", err)
+            self.assertEqual(run("fresh_points.py", "--cases", "", tmp)[0], 2)
+
 
 class FormCheckSignal(unittest.TestCase):
     """calibrate/form_check_signal.py: the false alarms of twins whose planted effects were tried, by lambda."""
