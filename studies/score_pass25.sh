@@ -48,5 +48,10 @@ mkdir -p $C && (cd /work/pass25/replay-loop-p24 && tar cf - --exclude='runs.sqli
 /usr/bin/python3 calibrate/pass_counts.py $P $C > $C/pass_counts.txt                      # expectation 8, side by side
 /usr/bin/python3 calibrate/interval_coverage.py $C > $C/interval_coverage.md
 /usr/bin/python3 calibrate/fresh_points.py $C > $C/fresh_points.txt                       # expectation 9
+# With ONLY, expectation 9 compares the pass on the same twins, as the addendum asks (added at scoring:
+# fresh_points.py had no --cases until then).
+if [[ $# -ge 2 ]]; then
+  /usr/bin/python3 calibrate/fresh_points.py --cases "$2" $P > $C/fresh_points_pass_same_twins.txt
+fi
 /usr/bin/python3 calibrate/surface_optimism.py $C > $C/surface_optimism.txt
 echo scored
