@@ -2,7 +2,7 @@
 """How much better the response surface says a calibration fits than direct simulation does at the same
 parameters on fresh seeds, per blind pass (a diagnostic; it decides nothing).
 
-    /usr/bin/python3 calibrate/surface_optimism.py PASS_DIR [PASS_DIR...]
+    /usr/bin/python3 calibrate/surface_optimism.py [--cases "CASE..."] PASS_DIR [PASS_DIR...]   (--cases: only these calibrations)
 
 Every fitted state is re-scored by direct simulation on fresh seeds (calibrate/fit.hpp): summary.json's
 `fitted.chi2` is the surface's chi^2 over the fitted points at the state's parameters, `fitted_fresh.chi2`
@@ -30,7 +30,7 @@ import math
 import statistics
 import sys
 
-from blind_pass import calibrations
+from blind_pass import calibrations, take_option
 
 
 def variance_excess(n, share, replicates, steps=20000):
@@ -52,11 +52,11 @@ def variance_excess(n, share, replicates, steps=20000):
     return n * (mean - 1)
 
 
-def differences(pass_dir, state):
+def differences(pass_dir, state, cases=None):
     """[(fresh chi2 less surface chi2, its expectation 2k + variance_excess, the same per held-out point or
     None)] over the pass's calibrations with both."""
     out = []
-    for _, path in calibrations(pass_dir):
+    for _, path in calibrations(pass_dir, cases=cases):
         with open(path) as f:
             summary = json.load(f)
         s = summary.get(state, {})
@@ -87,13 +87,20 @@ def line(name, pairs):
 
 
 def main(args):
-    if not args:
-        print("usage: surface_optimism.py PASS_DIR [PASS_DIR...]", file=sys.stderr)
+    named = take_option(args, "--cases", "a list of case names")
+    cases = set(named.split()) if named is not None else None
+    if not args or cases == set():
+        print('usage: surface_optimism.py [--cases "CASE..."] PASS_DIR [PASS_DIR...]', file=sys.stderr)
         return 2
     for pass_dir in args:
-        print(pass_dir)
+        missing = sorted(cases - {case for case, _ in calibrations(pass_dir)}) if cases is not None else []
+        if missing:
+            print(f"error: {pass_dir} has no calibration {', '.join(missing)}", file=sys.stderr)
+            return 2
+    for pass_dir in args:
+        print(pass_dir + (f" (the {len(cases)} cases asked)" if cases is not None else ""))
         for state, name in (("before", "  baseline"), ("after", "  final")):
-            print(line(name, differences(pass_dir, state)))
+            print(line(name, differences(pass_dir, state, cases)))
     return 0
 
 

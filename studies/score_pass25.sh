@@ -13,14 +13,14 @@
 # LAUNCH_TIMEV: the /usr/bin/time record of the launch that finished the pass (/work/pass25.timevN).
 # ONLY: the twins this machine's store holds runs of, when the pass was carried between machines (the
 # control replays only those, and expectations 8-9 compare the pass on those twins only).
-# The control's binary: /work/bin-p25c/gapflow, built as results/calibration-blind-pass25/carry/README.md says.
+# The control's binary: /work/bin-p25c/gapflow, built as results/calibration-blind-pass25/README.md says.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [[ $# -ge 1 && -f $1 ]] || { echo "usage: studies/score_pass25.sh LAUNCH_TIMEV [ONLY]" >&2; exit 2; }
 timev=$1
 P=results/calibration-blind-pass25
 for b in /work/bin-p25/gapflow /work/bin-p25c/gapflow; do
-  [[ -x $b ]] || { echo "error: $b missing (see $P/carry/README.md)" >&2; exit 2; }
+  [[ -x $b ]] || { echo "error: $b missing (see $P/README.md)" >&2; exit 2; }
 done
 (( $(ls /work/pass25/*/summary.json | wc -l) == 28 )) || { echo "error: pass 25 has not ended" >&2; exit 2; }
 [[ -f $P/cases.csv ]] || studies/blind_pass_copy.sh /work/pass25 $P "$timev"
@@ -52,6 +52,7 @@ mkdir -p $C && (cd /work/pass25/replay-loop-p24 && tar cf - --exclude='runs.sqli
 # fresh_points.py had no --cases until then).
 if [[ $# -ge 2 ]]; then
   /usr/bin/python3 calibrate/fresh_points.py --cases "$2" $P > $C/fresh_points_pass_same_twins.txt
+  /usr/bin/python3 calibrate/surface_optimism.py --cases "$2" $P > $C/surface_optimism_pass_same_twins.txt
 fi
 /usr/bin/python3 calibrate/surface_optimism.py $C > $C/surface_optimism.txt
 echo scored

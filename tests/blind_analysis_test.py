@@ -479,6 +479,12 @@ class BlindAnalysis(unittest.TestCase):
                 (folder / case / "summary.json").write_text(json.dumps(s))
             code, out, _ = run("surface_optimism.py", folder)
             self.assertIn("expected about +33.3; per held-out point", out)
+            # --cases: only b (fresh 60 against 43: +17); a name the folder lacks is refused.
+            code, out, _ = run("surface_optimism.py", "--cases", "b", folder)
+            self.assertEqual(code, 0)
+            self.assertIn("final: fresh less surface chi2 median +17.0", out)
+            self.assertIn("1 calibrations", out)
+            self.assertEqual(run("surface_optimism.py", "--cases", "b c", folder)[0], 2)
         self.assertEqual(run("surface_optimism.py")[0], 2)
 
     def test_pass_counts_gives_the_cost_and_the_wording_of_the_identifications(self):
