@@ -264,6 +264,15 @@ TEST(DataFile, AnObservablesFloorReplacesTheDefaultOne) {
                                      "t.toml", source_path(""));
   ASSERT_EQ(d.points.size(), 3u);
   EXPECT_NEAR(d.points[0].se, std::hypot(2.0, 0.1 * 80), 1e-12);          // j_mid: the default, relative
+  // Without an absolute floor, bit for bit what files gave before [floors] (the three-argument hypot rounds
+  // otherwise in about 4 of 10 cases, and that moved every baseline fit by ~1e-8; blind pass 25's replay).
+  for (double u : {0.7, 1.3, 2.0, 2.9, 3.7})
+    for (double value : {13.0, 47.0, 80.0, 91.5}) {
+      const DataFile e = parse_data_file(with_default + "[[point]]\nW_over_d = 4\nvalue = " + std::to_string(value) +
+                                             "\nuncertainty = " + std::to_string(u) + "\n" + points,
+                                         "t.toml", source_path(""));
+      EXPECT_EQ(e.points[0].se, std::hypot(u, 0.1 * value)) << u << " " << value;
+    }
   EXPECT_NEAR(d.points[1].se, std::hypot(0.1, 0.2), 1e-12);               // exit offset: its absolute floor only
   EXPECT_NEAR(d.points[2].se, std::hypot(0.05, 0.05 * 2, 0.03), 1e-12);   // both of its own, none of the default
   EXPECT_NEAR(d.fit_se(2), std::hypot(0.05, 0.05 * 2, 0.03) / 2, 1e-12);   // log scale: an absolute floor / value
