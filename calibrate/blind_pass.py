@@ -20,6 +20,24 @@ def calibrations(pass_dir, pattern="*", cases=None):
     return out
 
 
+def take_cases(args):
+    """--cases "CASE..." taken from args: the set named, or None without the option; exit 2 on an empty list."""
+    named = take_option(args, "--cases", "a list of case names")
+    cases = set(named.split()) if named is not None else None
+    if cases == set():
+        print("error: --cases needs at least one case name", file=sys.stderr)
+        sys.exit(2)
+    return cases
+
+
+def require_cases(folder, cases):
+    """Exit 2 when `folder` lacks a calibration named in `cases` (None: nothing asked)."""
+    missing = sorted(cases - {case for case, _ in calibrations(folder)}) if cases is not None else []
+    if missing:
+        print(f"error: {folder} has no calibration {', '.join(missing)}", file=sys.stderr)
+        sys.exit(2)
+
+
 def take_option(args, name, what):
     """The value after `name` in args (both removed), or None; exit 2 where the value is missing."""
     if name not in args:

@@ -44,7 +44,7 @@ import statistics
 import sys
 from collections import defaultdict
 
-from blind_pass import calibrations, take_option
+from blind_pass import calibrations, require_cases, take_cases
 
 LINEAR = {"exit_offset", "clog_share", "ln_s_plus_1"}   # calibrate/data_file.cpp default_scale
 
@@ -193,10 +193,9 @@ def excess_text(parts, part):
 
 
 def main(args):
-    named = take_option(args, "--cases", "a list of case names")
-    cases = set(named.split()) if named is not None else None
+    cases = take_cases(args)
     folders = args
-    if not folders or cases == set():
+    if not folders:
         print(__doc__.split("\n\n")[1], file=sys.stderr)
         sys.exit(2)
     for folder in folders:
@@ -204,10 +203,7 @@ def main(args):
             print(f"error: no folder {folder}", file=sys.stderr)
             sys.exit(2)
     for folder in folders:
-        missing = sorted(cases - {case for case, _ in calibrations(folder)}) if cases is not None else []
-        if missing:
-            print(f"error: {folder} has no calibration {', '.join(missing)}", file=sys.stderr)
-            sys.exit(2)
+        require_cases(folder, cases)
     for folder in folders:
         report(folder, cases)
 

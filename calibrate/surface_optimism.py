@@ -30,7 +30,7 @@ import math
 import statistics
 import sys
 
-from blind_pass import calibrations, take_option
+from blind_pass import calibrations, require_cases, take_cases
 
 
 def variance_excess(n, share, replicates, steps=20000):
@@ -87,16 +87,12 @@ def line(name, pairs):
 
 
 def main(args):
-    named = take_option(args, "--cases", "a list of case names")
-    cases = set(named.split()) if named is not None else None
-    if not args or cases == set():
+    cases = take_cases(args)
+    if not args:
         print('usage: surface_optimism.py [--cases "CASE..."] PASS_DIR [PASS_DIR...]', file=sys.stderr)
         return 2
     for pass_dir in args:
-        missing = sorted(cases - {case for case, _ in calibrations(pass_dir)}) if cases is not None else []
-        if missing:
-            print(f"error: {pass_dir} has no calibration {', '.join(missing)}", file=sys.stderr)
-            return 2
+        require_cases(pass_dir, cases)
     for pass_dir in args:
         print(pass_dir + (f" (the {len(cases)} cases asked)" if cases is not None else ""))
         for state, name in (("before", "  baseline"), ("after", "  final")):
